@@ -1,0 +1,128 @@
+"""``optdesign analyze``: evaluate a design exactly, every stroke and every listed eccentricity."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from .design import Design
+from .envelope import StrokeFigures
+from .errors import AssemblyError
+from .exact import exact_figures
+
+
+@dataclass
+class AnalysisResult:
+    """What ``analyze`` prints: the contract's keys first (shared/DESIGN.md section 3)."""
+
+    assembles: bool
+    min_transmission_angle_deg: float | None
+    strokes: dict[str, StrokeFigures]
+    design: dict[str, float]
+    mechanism: str
+    input_speed: float
+    chains_min_transmission_angle_deg: list[float] = field(default_factory=list)
+    regulation: list[dict] = field(default_factory=list)
+    failure: dict | None = None
+    sections: dict[str, dict] = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        out = {
+            "assembles": self.assembles,
+            "min_transmission_angle_deg": self.min_transmission_angle_deg,
+            "strokes": {k: v.to_dict() for k, v in self.strokes.items()},
+            "mechanism": self.mechanism,
+            "input_speed": self.input_speed,
+            "design": self.design,
+            "chains_min_transmission_angle_deg": self.chains_min_transmission_angle_deg,
+            "regulation": self.regulation,
+        }
+        if self.failure:
+            out["failure"] = self.failure
+        out.update(self.sections)
+        return out
+
+
+def transmission_angles(design: Design, eccentricity: float = 1.0,
+                        n_grid: int = 720) -> np.ndarray:
+    """Least transmission angle min(μ, 180° - μ) of every chain over the turn, in degrees.
+
+    The worst angle is where |cos μ| peaks: found on a grid, then refined by a bounded
+    scalar search on the neighbouring cells.
+    """
+    phi = np.linspace(0.0, 2 * np.pi, n_grid, endpoint=False)
+    cos_mu = design.sample(phi, eccentricity)["cos_mu"]
+    h = phi[1] - phi[0]
+    worst = []
+    for k in range(cos_mu.shape[0]):
+        j = int(np.argmax(np.abs(cos_mu[k])))
+        res = minimize_scalar(lambda x: -abs(design.at(x % (2 * np.pi), eccentricity)
+                                             ["cos_mu"][k]),
+                              bounds=(phi[j] - h, phi[j] + h), method="bounded",
+                              options={"xatol": 1e-10})
+        c = min(max(-res.fun, abs(cos_mu[k, j])), 1.0)
+        worst.append(90.0 - np.degrees(np.arccos(c)))   # min(μ, 180-μ) = 90° - acos|cos μ|
+    return np.array(worst)
+
+
+def analyze(problem, values: dict | None = None) -> AnalysisResult:
+    """Exact figures of the problem's design (fixed and initial values) or of ``values``.
+
+    A design that does not assemble at some eccentricity comes back with ``assembles`` false
+    and a ``failure`` naming the chain and the crank angle; nothing is computed past it.
+    """
+    design = Design.from_problem(problem, values)
+    mech = design.model
+    result = AnalysisResult(assembles=True, min_transmission_angle_deg=None, strokes={},
+                            design={k: float(v) for k, v in design.values.items()},
+                            mechanism=problem.mechanism, input_speed=problem.input_speed)
+    result.design[mech.count_variable] = design.count
+    eccentricities = sorted(set(problem.eccentricities) | {1.0}, reverse=True)
+    for e in eccentricities:
+        try:
+            design.check_assembly(e)
+        except AssemblyError as exc:
+            result.assembles = False
+            result.failure = {"chain": exc.chain, "phi_deg": exc.phi_deg, "eccentricity": e,
+                              "message": str(exc)}
+            return result
+        angles = transmission_angles(design, e)
+        strokes = {s: exact_figures(design, s, problem.input_speed, e)[0] for s in mech.strokes}
+        if e == 1.0:
+            result.strokes = strokes
+            result.chains_min_transmission_angle_deg = [float(a) for a in angles]
+            result.min_transmission_angle_deg = float(angles.min())
+        if e in problem.eccentricities:
+            result.regulation.append({"eccentricity": e,
+                                      "min_transmission_angle_deg": float(angles.min()),
+                                      "strokes": {k: v.to_dict() for k, v in strokes.items()}})
+    for key, section in problem.sections.items():
+        if hasattr(section, "analyze"):
+            result.sections[key] = section.analyze(problem, result)
+    return result
+
+
+def format_analysis(result: AnalysisResult, name: str = "") -> str:
+    """A readable table of an analysis, for the terminal."""
+    lines = [f"{name or result.mechanism}: {result.mechanism}, ω1 = {result.input_speed:g} rad/s"]
+    lines.append("design: " + ", ".join(f"{k} = {v:g}" for k, v in result.design.items()))
+    if not result.assembles:
+        lines.append(f"does NOT assemble: {result.failure['message']}")
+        return "\n".join(lines)
+    lines.append(f"least transmission angle: {result.min_transmission_angle_deg:.2f} deg "
+                 f"(per chain: {', '.join(f'{a:.1f}' for a in result.chains_min_transmission_angle_deg)})")
+    for row in result.regulation:
+        lines.append("")
+        lines.append(f"eccentricity {row['eccentricity']:g}:")
+        lines.append(f"  {'stroke':<8} {'ω_max':>8} {'ω_min':>8} {'ω_avg':>8} {'ω_mean':>8} "
+                     f"{'δ':>7} {'δ_mean':>7} {'ratio':>7}")
+        for stroke, f in row["strokes"].items():
+            lines.append(f"  {stroke:<8} {f['omega_max']:8.3f} {f['omega_min']:8.3f} "
+                         f"{f['omega_avg']:8.3f} {f['omega_mean']:8.3f} {f['delta']:7.4f} "
+                         f"{f['delta_mean']:7.4f} {f['ratio']:7.4f}")
+    for key, section in result.sections.items():
+        lines.append("")
+        lines.append(f"{key}: " + ", ".join(f"{k} = {v:.4g}" if isinstance(v, float) else
+                                            f"{k} = {v}" for k, v in section.items()))
+    return "\n".join(lines)

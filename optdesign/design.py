@@ -1,0 +1,98 @@
+"""A concrete design: one mechanism, its phase count, options and link lengths, evaluated numerically."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import numpy as np
+
+from .errors import AssemblyError
+from .mechanisms import get_mechanism
+
+
+@dataclass(frozen=True)
+class Design:
+    """Every design key at a value; the numeric face of the symbolic mechanism."""
+
+    mechanism: str
+    values: Mapping[str, float]
+    options: Mapping[str, str] = field(default_factory=dict)
+
+    @classmethod
+    def from_problem(cls, problem, values: Mapping[str, float] | None = None) -> "Design":
+        v = problem.start_values() | dict(values or {})
+        return cls(problem.mechanism, v, dict(problem.options))
+
+    @property
+    def model(self):
+        return get_mechanism(self.mechanism)
+
+    @property
+    def count(self) -> int:
+        return int(round(self.values[self.model.count_variable]))
+
+    @property
+    def option_key(self) -> tuple[tuple[str, str], ...]:
+        return tuple(sorted((self.model.default_options() | dict(self.options)).items()))
+
+    def function(self):
+        """The mechanism's ``casadi.Function`` (phi, p) -> (theta, dtheta, ddtheta, cos_mu)."""
+        return self.model.kinematics(self.count, self.option_key)
+
+    def p(self, eccentricity: float = 1.0) -> np.ndarray:
+        """Parameter vector, the regulating length scaled by the eccentricity fraction e."""
+        reg = self.model.regulating_variable
+        return np.array([self.values[k] * (eccentricity if k == reg else 1.0)
+                         for k in self.model.lengths], dtype=float)
+
+    def scaled(self, factor: float) -> "Design":
+        """All lengths times ``factor`` (a change of unit): δ and the ratio must not change."""
+        lengths = set(self.model.lengths)
+        return Design(self.mechanism, {k: v * factor if k in lengths else v
+                                       for k, v in self.values.items()}, self.options)
+
+    def breakpoints(self, eccentricity: float = 1.0) -> tuple[float, ...]:
+        values = dict(zip(self.model.lengths, self.p(eccentricity))) | {
+            self.model.count_variable: self.count}
+        return tuple(self.model.breakpoints(values, self.count))
+
+    # ------------------------------------------------------------------ evaluation
+    def sample(self, phi: np.ndarray, eccentricity: float = 1.0) -> dict[str, np.ndarray]:
+        """theta, dtheta, ddtheta (chains × samples) and cos_mu at the crank angles ``phi``."""
+        phi = np.atleast_1d(np.asarray(phi, dtype=float))
+        fmap = self.function().map(phi.size)
+        out = fmap(phi[None, :], self.p(eccentricity))
+        return {k: np.array(v) for k, v in zip(("theta", "dtheta", "ddtheta", "cos_mu"), out)}
+
+    def at(self, phi: float, eccentricity: float = 1.0) -> dict[str, np.ndarray]:
+        """The same at one crank angle (vectors over chains)."""
+        out = self.function()(float(phi), self.p(eccentricity))
+        return {k: np.array(v).ravel()
+                for k, v in zip(("theta", "dtheta", "ddtheta", "cos_mu"), out)}
+
+    def check_assembly(self, eccentricity: float = 1.0, n_samples: int = 2048) -> None:
+        """Raise :class:`AssemblyError` naming the first chain and crank angle that fail.
+
+        A chain assembles while the discriminant 1 - cos²μ >= 0 (shared/DESIGN.md 1.1); the
+        failing angle is located by bisection to 1e-9 rad.
+        """
+        phi = np.linspace(0.0, 2 * np.pi, n_samples, endpoint=False)
+        cos_mu = self.sample(phi, eccentricity)["cos_mu"]
+        bad = ~(np.abs(cos_mu) <= 1.0)
+        if not bad.any():
+            return
+        j = int(np.argmax(bad.any(axis=0)))
+        chain = int(np.argmax(bad[:, j]))
+        lo, hi = (phi[j - 1], phi[j]) if j > 0 else (phi[j], phi[j])
+        if j > 0:
+            for _ in range(40):
+                mid = 0.5 * (lo + hi)
+                if abs(self.at(mid, eccentricity)["cos_mu"][chain]) <= 1.0:
+                    lo = mid
+                else:
+                    hi = mid
+        c = cos_mu[chain, j]
+        detail = ("the rod and rocker cannot reach each other" if np.isfinite(c)
+                  else "joint positions undefined")
+        raise AssemblyError(chain + 1, float(np.degrees(hi)) % 360.0,
+                            f"{detail}; eccentricity {eccentricity:g}")

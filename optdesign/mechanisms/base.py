@@ -1,0 +1,121 @@
+"""What every converting mechanism declares, so the commands run it without knowing which it is.
+
+A mechanism turns the crank angle φ1 into the angles θ_k of its output members (rockers), one per
+freewheel. Everything else (speeds, envelopes, ripple, the NLP, plots) is derived from the one
+symbolic function it builds here, exactly as CasADi's own examples wrap a model once in a
+``casadi.Function``.
+"""
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import ClassVar, Mapping
+
+import casadi as ca
+
+#: Signs applied to the rocker speeds for each stroke: the freewheels pass the rocker's motion
+#: in that direction only; ``both`` is a second output shaft through a 1:1 reversing gear pair.
+STROKE_SIGNS: dict[str, tuple[int, ...]] = {"forward": (1,), "reverse": (-1,), "both": (1, -1)}
+
+
+@dataclass(frozen=True)
+class VariableSpec:
+    """One design key of a mechanism."""
+
+    name: str
+    unit: str
+    meaning: str
+    integer: bool = False
+    minimum: float = 0.0          # strict lower limit (lengths > 0; counts >= minimum)
+
+
+@dataclass(frozen=True)
+class OptionSpec:
+    """A discrete modelling choice (assembly branch, layout reading), set under ``options:``."""
+
+    name: str
+    choices: tuple[str, ...]
+    default: str
+    meaning: str
+
+
+class Mechanism(ABC):
+    """Base class of the converting mechanisms found through :mod:`optdesign.mechanisms`."""
+
+    name: ClassVar[str]
+    source: ClassVar[str]
+    variables: ClassVar[tuple[VariableSpec, ...]]
+    count_variable: ClassVar[str]          # the integer key setting the number of freewheels
+    regulating_variable: ClassVar[str]     # scaled by the eccentricity fraction e
+    strokes: ClassVar[tuple[str, ...]] = ("forward", "reverse")
+    options: ClassVar[tuple[OptionSpec, ...]] = ()
+
+    # ----------------------------------------------------------------- declarations
+    @property
+    def lengths(self) -> tuple[str, ...]:
+        """Names of the continuous design variables, in the order of the parameter vector."""
+        return tuple(v.name for v in self.variables if not v.integer)
+
+    def spec(self, name: str) -> VariableSpec:
+        return next(v for v in self.variables if v.name == name)
+
+    def default_options(self) -> dict[str, str]:
+        return {o.name: o.default for o in self.options}
+
+    # ----------------------------------------------------------------- the model
+    @abstractmethod
+    def chain_expressions(self, phi, p: Mapping[str, ca.SX], count: int,
+                          options: Mapping[str, str]) -> dict:
+        """Symbolic model at crank angle ``phi``.
+
+        Returns a dict with ``theta`` (list of output-member angles, one per freewheel),
+        ``cos_mu`` (list of cosines of the transmission angles; assembly needs |cos μ| <= 1),
+        ``joints`` (name -> 2-vector, for drawings) and ``links`` (pairs of joint names).
+        """
+
+    def design_constraints(self, p: Mapping[str, ca.SX], count: int,
+                           constraints) -> list[tuple[str, ca.SX]]:
+        """Extra constraints g(p) >= 0 of this mechanism (e.g. pin radius), by name."""
+        return []
+
+    def check_values(self, values: Mapping[str, float], count: int) -> None:
+        """Raise :class:`ProblemError` for values no turn of the crank can make sense of."""
+
+    def breakpoints(self, values: Mapping[str, float], count: int) -> tuple[float, ...]:
+        """Crank angles where the speeds jump (piecewise mechanisms); none for smooth ones."""
+        return ()
+
+    # ----------------------------------------------------------------- built once
+    @lru_cache(maxsize=64)
+    def kinematics(self, count: int, options: tuple[tuple[str, str], ...] = ()) -> ca.Function:
+        """``casadi.Function`` (phi, p) -> (theta, dtheta, ddtheta, cos_mu).
+
+        ``dtheta = dθ/dφ1`` and ``ddtheta = d²θ/dφ1²`` by algorithmic differentiation, so the
+        rocker speed is ω_k = ω1 · dtheta_k (shared/DESIGN.md 1.1).
+        """
+        opts = self.default_options() | dict(options)
+        phi = ca.SX.sym("phi")
+        pvec = ca.SX.sym("p", len(self.lengths))
+        p = {name: pvec[i] for i, name in enumerate(self.lengths)}
+        model = self.chain_expressions(phi, p, count, opts)
+        theta = ca.vertcat(*model["theta"])
+        dtheta = ca.jacobian(theta, phi)
+        ddtheta = ca.jacobian(dtheta, phi)
+        cos_mu = ca.vertcat(*model["cos_mu"])
+        return ca.Function(f"{self.name}_n{count}", [phi, pvec],
+                           [theta, dtheta, ddtheta, cos_mu],
+                           ["phi", "p"], ["theta", "dtheta", "ddtheta", "cos_mu"])
+
+    @lru_cache(maxsize=64)
+    def joints(self, count: int, options: tuple[tuple[str, str], ...] = ()):
+        """``casadi.Function`` (phi, p) -> 2×J joint positions, and the names and links."""
+        opts = self.default_options() | dict(options)
+        phi = ca.SX.sym("phi")
+        pvec = ca.SX.sym("p", len(self.lengths))
+        p = {name: pvec[i] for i, name in enumerate(self.lengths)}
+        model = self.chain_expressions(phi, p, count, opts)
+        names = list(model["joints"])
+        points = ca.horzcat(*[model["joints"][k] for k in names])
+        return ca.Function(f"{self.name}_joints_n{count}", [phi, pvec], [points]), names, \
+            list(model["links"])

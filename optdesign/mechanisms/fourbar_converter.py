@@ -1,0 +1,84 @@
+"""The n-phase four-bar converter of Sharkov & Kalinin 2022 (shared/seeds/000_*, DESIGN.md 1.1).
+
+Crank OA (l1, angle φ1) turns about O. The main coupler is a disc hinged at A; its arm AB1 (l2)
+drives rocker O1B1 (l3) about O1 = (l0, 0). Rocker pivots O_i sit at radius l0, angle (i-1)τ,
+τ = 2π/n. Pins C_i on the disc sit at angle (i-1)τ + φ2 (φ2 = direction of AB1, eq. 4);
+rods C_iB_i (l2') drive rockers O_iB_i (l3).
+
+Pin layout. The paper's eq. (2) puts C_i at radius l2' from A, but its table is reproduced only
+when |AC_i| = l2 - l2' (A, C1, B1 collinear, so every rod C_iB_i is l2' long, C1B1 included):
+``pin_layout: collinear`` (default). ``pin_layout: text`` is eq. (2) to the letter.
+"""
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+
+from ..errors import ProblemError
+from .base import Mechanism, OptionSpec, VariableSpec
+from .geometry import angle_of, circle_intersection, unit
+
+BRANCH_SIGN = {"left": 1, "right": -1}
+
+
+class FourBarConverter(Mechanism):
+    name = "fourbar_converter"
+    source = "Sharkov & Kalinin 2022, shared/seeds/000_41f7ea263fb1d3de.txt"
+    variables = (
+        VariableSpec("l0", "mm", "crank centre O to every rocker pivot O_i"),
+        VariableSpec("l1", "mm", "crank OA (the eccentricity; regulated)"),
+        VariableSpec("l2", "mm", "main coupler arm AB1"),
+        VariableSpec("l2_prime", "mm", "additional rods C_iB_i"),
+        VariableSpec("l3", "mm", "rockers O_iB_i"),
+        VariableSpec("phases", "-", "phase count n (rockers and freewheels)", integer=True,
+                     minimum=2),
+    )
+    count_variable = "phases"
+    regulating_variable = "l1"
+    options = (
+        OptionSpec("branch", ("left", "right"), "left",
+                   "assembly branch: B_i left (paper) or right of the line from the driving "
+                   "joint to the rocker pivot; 'right' is the mirror image"),
+        OptionSpec("pin_layout", ("collinear", "text"), "collinear",
+                   "|AC_i| = l2 - l2' (reproduces the paper's table) or l2' (its eq. 2)"),
+    )
+
+    def chain_expressions(self, phi, p, count, options):
+        """Joint positions by circle intersections, eqs. (1)-(4) and the O_iC_iB_i triangles.
+
+        The rocker angle θ_k is the direction of O_kB_k (the paper's φ_{2k+1}); its transmission
+        angle μ_k is the angle at B_k between rod (coupler) and rocker.
+        """
+        l0, l1, l2, l2p, l3 = (p[k] for k in ("l0", "l1", "l2", "l2_prime", "l3"))
+        sign = BRANCH_SIGN[options["branch"]]
+        pin_radius = l2 - l2p if options["pin_layout"] == "collinear" else l2p
+        tau = 2 * math.pi / count
+        a = l1 * unit(phi)                                             # eq. (3)
+        o1 = ca.vertcat(l0, 0)
+        b1, cos_mu1 = circle_intersection(a, l2, o1, l3, sign)         # four-bar O A B1 O1
+        phi2 = angle_of(b1 - a)
+        theta = [angle_of(b1 - o1)]
+        cos_mu = [cos_mu1]
+        joints = {"O": ca.vertcat(0, 0), "A": a, "O1": o1, "B1": b1}
+        links = [("O", "A"), ("A", "B1"), ("O1", "B1")]
+        for i in range(2, count + 1):
+            angle = (i - 1) * tau
+            o_i = l0 * unit(angle)
+            c_i = a + pin_radius * unit(angle + phi2)                 # eq. (4)
+            # B_i on the same side of C_i -> O_i as B1 of A -> O1: the branch is kept.
+            b_i, cos_mu_i = circle_intersection(o_i, l3, c_i, l2p, -sign)
+            theta.append(angle_of(b_i - o_i))
+            cos_mu.append(cos_mu_i)
+            joints |= {f"O{i}": o_i, f"C{i}": c_i, f"B{i}": b_i}
+            links += [("A", f"C{i}"), (f"C{i}", f"B{i}"), (f"O{i}", f"B{i}")]
+        return {"theta": theta, "cos_mu": cos_mu, "joints": joints, "links": links}
+
+    def design_constraints(self, p, count, constraints):
+        """Pins must fit on the disc: l2 - l2' >= min_pin_radius (g >= 0)."""
+        return [("pin_radius", p["l2"] - p["l2_prime"] - constraints.min_pin_radius)]
+
+    def check_values(self, values, count):
+        if values["l1"] >= values["l0"]:
+            raise ProblemError(f"design.l1 must be shorter than l0 (got l1 = {values['l1']:g}, "
+                               f"l0 = {values['l0']:g}): the crank would reach the rocker pivots")

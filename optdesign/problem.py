@@ -1,0 +1,412 @@
+"""Problem files (shared/DESIGN.md section 3), loaded strictly into frozen dataclasses.
+
+Every error is a :class:`ProblemError` whose one line names the file and the key path and says
+what would be right: ``pump.yaml: design.l3.upper must exceed lower (got 20 <= 56)``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from importlib import import_module
+from pathlib import Path
+from typing import Any, Mapping
+
+from .errors import ProblemError
+from .mechanisms import get_mechanism
+
+#: Optional sections parsed by the module that owns them, imported only when present:
+#: name -> "module:function(section_dict, where) -> parsed object".
+SECTION_PARSERS: dict[str, str] = {}
+
+TOP_KEYS = {"name", "mechanism", "input_speed", "stroke", "design", "options", "constraints",
+            "objective", "regulation", "solver"}
+RIPPLE_DEFINITIONS = ("midrange", "mean")
+OBJECTIVES = ("ripple", "-ratio")
+
+
+@dataclass(frozen=True)
+class Variable:
+    """A design key: fixed (``value``) or free within ``lower``..``upper`` (or over ``choices``)."""
+
+    name: str
+    value: float | None = None
+    lower: float | None = None
+    upper: float | None = None
+    initial: float | None = None
+    choices: tuple[int, ...] | None = None
+
+    @property
+    def is_free(self) -> bool:
+        return self.value is None
+
+    def start(self) -> float:
+        """Fixed value, else the initial guess, else the middle of the bounds."""
+        if self.value is not None:
+            return self.value
+        if self.initial is not None:
+            return self.initial
+        if self.choices:
+            return self.choices[0]
+        return 0.5 * (self.lower + self.upper)
+
+    def admissible(self) -> list[int]:
+        """The integer values an integer variable may take."""
+        if self.value is not None:
+            return [int(self.value)]
+        if self.choices:
+            return list(self.choices)
+        return list(range(int(self.lower), int(self.upper) + 1))
+
+
+@dataclass(frozen=True)
+class Constraints:
+    """Design constraints; every one is stated as g >= 0 in the NLP."""
+
+    min_transmission_angle_deg: float = 40.0
+    min_pin_radius: float = 0.0
+    assembly_margin: float = 1e-3       # 1 - cos²μ >= margin at every sample
+    grashof: bool = False               # chain 1 a crank-rocker: s + l <= p + q
+    extra: Mapping[str, Any] = field(default_factory=dict)   # keys other modules own
+
+
+@dataclass(frozen=True)
+class Objective:
+    minimize: str = "ripple"            # ripple | -ratio
+    ripple: str = "midrange"            # midrange (paper) | mean (time mean)
+    min_ratio: float = 0.0
+    max_ripple: float | None = None
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    samples: int = 180                  # crank samples per turn in the NLP
+    starts: int = 8                     # multi-start count (low-discrepancy sample)
+    smoothing: float = 200.0            # KS aggregation parameter ρ (per unit of ω/ω1 scale)
+    seed: int = 0
+    max_iter: int = 500
+
+
+@dataclass(frozen=True)
+class Problem:
+    """A loaded problem: what is optimised, independent of how it is solved."""
+
+    name: str
+    mechanism: str
+    input_speed: float
+    stroke: str
+    design: Mapping[str, Variable]
+    options: Mapping[str, str]
+    constraints: Constraints = Constraints()
+    objective: Objective = Objective()
+    eccentricities: tuple[float, ...] = (1.0,)
+    solver: SolverSettings = SolverSettings()
+    sections: Mapping[str, Any] = field(default_factory=dict)
+    source: str = "<dict>"
+
+    @property
+    def model(self):
+        return get_mechanism(self.mechanism)
+
+    @property
+    def count_variable(self) -> Variable:
+        return self.design[self.model.count_variable]
+
+    def counts(self) -> list[int]:
+        return self.count_variable.admissible()
+
+    def free_lengths(self) -> list[str]:
+        return [k for k in self.model.lengths if self.design[k].is_free]
+
+    def start_values(self) -> dict[str, float]:
+        """Every design key at its fixed or initial value (the design ``analyze`` evaluates)."""
+        return {k: v.start() for k, v in self.design.items()}
+
+    def with_values(self, values: Mapping[str, float]) -> "Problem":
+        """The same problem with every given key fixed at the given value."""
+        design = dict(self.design)
+        for k, v in values.items():
+            design[k] = Variable(k, value=float(v))
+        return replace(self, design=design)
+
+
+# --------------------------------------------------------------------------- loading
+def load_problem(path: str | Path) -> Problem:
+    """Read and validate a YAML problem file."""
+    import yaml
+
+    path = Path(path)
+    where = path.name
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ProblemError(f"{path}: no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ProblemError(f"{path}: cannot be read ({exc.__class__.__name__})") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        line = f" at line {mark.line + 1}" if mark is not None else ""
+        raise ProblemError(f"{where}: not valid YAML{line}") from None
+    if data is None:
+        raise ProblemError(f"{where}: the file is empty")
+    return problem_from_dict(data, where=where, default_name=path.stem)
+
+
+def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "problem") -> Problem:
+    """Validate a problem given as a mapping (what a YAML file holds)."""
+    r = _Reader(where)
+    top = r.mapping(data, "")
+    r.known_keys(top, "", TOP_KEYS | set(SECTION_PARSERS))
+    name = r.text(top.get("name", default_name), "name")
+    if "mechanism" not in top:
+        raise r.error("mechanism", "is required")
+    mechanism_name = r.text(top["mechanism"], "mechanism")
+    try:
+        mech = get_mechanism(mechanism_name)
+    except ProblemError as exc:
+        raise r.error("mechanism", str(exc)) from None
+    if "input_speed" not in top:
+        raise r.error("input_speed", "is required (crank speed ω1, rad/s)")
+    input_speed = r.number(top["input_speed"], "input_speed", positive=True)
+    stroke = r.text(top.get("stroke", "forward"), "stroke")
+    if stroke not in mech.strokes:
+        raise r.error("stroke", f"must be one of {', '.join(mech.strokes)} (got {stroke!r})")
+
+    design = _read_design(r, top, mech)
+    options = _read_options(r, top.get("options", {}), mech)
+    constraints = _read_constraints(r, top.get("constraints", {}))
+    objective = _read_objective(r, top.get("objective", {}))
+    ecc = _read_regulation(r, top.get("regulation", {}))
+    solver = _read_solver(r, top.get("solver", {}))
+    sections = {}
+    for key, target in SECTION_PARSERS.items():
+        if key in top:
+            module, func = target.split(":")
+            sections[key] = getattr(import_module(module), func)(top[key], r.sub(key))
+    problem = Problem(name=name, mechanism=mechanism_name, input_speed=input_speed,
+                      stroke=stroke, design=design, options=options, constraints=constraints,
+                      objective=objective, eccentricities=ecc, solver=solver,
+                      sections=sections, source=where)
+    count = problem.count_variable.admissible()[0]
+    try:
+        mech.check_values(problem.start_values(), count)
+    except ProblemError as exc:
+        raise ProblemError(f"{where}: {exc}") from None
+    return problem
+
+
+def _read_design(r, top, mech) -> dict[str, Variable]:
+    if "design" not in top:
+        raise r.error("design", "is required")
+    raw = r.mapping(top["design"], "design")
+    r.known_keys(raw, "design", {v.name for v in mech.variables})
+    design = {}
+    for spec in mech.variables:
+        key = f"design.{spec.name}"
+        if spec.name not in raw:
+            raise r.error(key, f"is required ({spec.meaning}, {spec.unit})")
+        design[spec.name] = (_read_count if spec.integer else _read_length)(r, raw[spec.name],
+                                                                            key, spec)
+    return design
+
+
+def _read_length(r, value, key, spec) -> Variable:
+    if not isinstance(value, Mapping):
+        return Variable(spec.name, value=r.number(value, key, positive=True))
+    entry = r.mapping(value, key)
+    r.known_keys(entry, key, {"lower", "upper", "initial"})
+    for bound in ("lower", "upper"):
+        if bound not in entry:
+            raise r.error(f"{key}.{bound}", "is required for a free variable")
+    lower = r.number(entry["lower"], f"{key}.lower", positive=True)
+    upper = r.number(entry["upper"], f"{key}.upper", positive=True)
+    if upper < lower:
+        raise r.error(f"{key}.upper", f"must not be below lower (got {upper:g} < {lower:g})")
+    initial = None
+    if "initial" in entry:
+        initial = r.number(entry["initial"], f"{key}.initial", positive=True)
+        if not lower <= initial <= upper:
+            raise r.error(f"{key}.initial",
+                          f"must lie within [{lower:g}, {upper:g}] (got {initial:g})")
+    if upper == lower:
+        return Variable(spec.name, value=lower)
+    return Variable(spec.name, lower=lower, upper=upper, initial=initial)
+
+
+def _read_count(r, value, key, spec) -> Variable:
+    low = int(spec.minimum)
+    if not isinstance(value, Mapping):
+        return Variable(spec.name, value=float(r.integer(value, key, low)))
+    entry = r.mapping(value, key)
+    r.known_keys(entry, key, {"lower", "upper", "choices"})
+    if "choices" in entry:
+        if set(entry) != {"choices"}:
+            raise r.error(key, "takes either choices or lower/upper, not both")
+        items = entry["choices"]
+        if not isinstance(items, list) or not items:
+            raise r.error(f"{key}.choices", "must be a non-empty list of integers")
+        choices = tuple(sorted({r.integer(c, f"{key}.choices", low) for c in items}))
+        return Variable(spec.name, choices=choices)
+    for bound in ("lower", "upper"):
+        if bound not in entry:
+            raise r.error(f"{key}.{bound}", "is required (or give choices)")
+    lower = r.integer(entry["lower"], f"{key}.lower", low)
+    upper = r.integer(entry["upper"], f"{key}.upper", low)
+    if upper < lower:
+        raise r.error(f"{key}.upper", f"must not be below lower (got {upper} < {lower})")
+    return Variable(spec.name, choices=tuple(range(lower, upper + 1)))
+
+
+def _read_options(r, raw, mech) -> dict[str, str]:
+    raw = r.mapping(raw, "options")
+    specs = {o.name: o for o in mech.options}
+    r.known_keys(raw, "options", set(specs))
+    options = mech.default_options()
+    for k, v in raw.items():
+        v = r.text(v, f"options.{k}")
+        if v not in specs[k].choices:
+            raise r.error(f"options.{k}", f"must be one of {', '.join(specs[k].choices)} "
+                                          f"(got {v!r})")
+        options[k] = v
+    return options
+
+
+#: constraint keys owned by other modules (e.g. the driveline), kept as given in ``extra``.
+EXTRA_CONSTRAINT_KEYS: set[str] = set()
+
+
+def _read_constraints(r, raw) -> Constraints:
+    raw = r.mapping(raw, "constraints")
+    own = {"min_transmission_angle_deg", "min_pin_radius", "assembly_margin", "grashof"}
+    r.known_keys(raw, "constraints", own | EXTRA_CONSTRAINT_KEYS)
+    kw = {}
+    if "min_transmission_angle_deg" in raw:
+        mu = r.number(raw["min_transmission_angle_deg"], "constraints.min_transmission_angle_deg")
+        if not 0 <= mu < 90:
+            raise r.error("constraints.min_transmission_angle_deg",
+                          f"must lie in [0, 90) degrees (got {mu:g})")
+        kw["min_transmission_angle_deg"] = mu
+    if "min_pin_radius" in raw:
+        kw["min_pin_radius"] = r.number(raw["min_pin_radius"], "constraints.min_pin_radius")
+    if "assembly_margin" in raw:
+        m = r.number(raw["assembly_margin"], "constraints.assembly_margin")
+        if not 0 <= m < 1:
+            raise r.error("constraints.assembly_margin", f"must lie in [0, 1) (got {m:g})")
+        kw["assembly_margin"] = m
+    if "grashof" in raw:
+        if not isinstance(raw["grashof"], bool):
+            raise r.error("constraints.grashof", "must be true or false")
+        kw["grashof"] = raw["grashof"]
+    kw["extra"] = {k: v for k, v in raw.items() if k in EXTRA_CONSTRAINT_KEYS}
+    return Constraints(**kw)
+
+
+def _read_objective(r, raw) -> Objective:
+    raw = r.mapping(raw, "objective")
+    r.known_keys(raw, "objective", {"minimize", "ripple", "min_ratio", "max_ripple"})
+    kw = {}
+    if "minimize" in raw:
+        kw["minimize"] = r.text(raw["minimize"], "objective.minimize")
+        if kw["minimize"] not in OBJECTIVES:
+            raise r.error("objective.minimize", f"must be one of {', '.join(OBJECTIVES)} "
+                                                f"(got {kw['minimize']!r})")
+    if "ripple" in raw:
+        kw["ripple"] = r.text(raw["ripple"], "objective.ripple")
+        if kw["ripple"] not in RIPPLE_DEFINITIONS:
+            raise r.error("objective.ripple", f"must be one of {', '.join(RIPPLE_DEFINITIONS)}"
+                                              f" (got {kw['ripple']!r})")
+    if "min_ratio" in raw:
+        kw["min_ratio"] = r.number(raw["min_ratio"], "objective.min_ratio")
+        if kw["min_ratio"] < 0:
+            raise r.error("objective.min_ratio", f"must not be negative (got {kw['min_ratio']:g})")
+    if "max_ripple" in raw:
+        kw["max_ripple"] = r.number(raw["max_ripple"], "objective.max_ripple", positive=True)
+    if kw.get("minimize") == "-ratio" and "max_ripple" not in kw:
+        raise r.error("objective.max_ripple", "is required when minimize is -ratio")
+    return Objective(**kw)
+
+
+def _read_regulation(r, raw) -> tuple[float, ...]:
+    raw = r.mapping(raw, "regulation")
+    r.known_keys(raw, "regulation", {"eccentricity"})
+    values = raw.get("eccentricity", [1.0])
+    if not isinstance(values, list) or not values:
+        raise r.error("regulation.eccentricity", "must be a non-empty list of fractions in (0, 1]")
+    out = []
+    for v in values:
+        e = r.number(v, "regulation.eccentricity", positive=True)
+        if e > 1:
+            raise r.error("regulation.eccentricity", f"fractions must lie in (0, 1] (got {e:g})")
+        out.append(e)
+    return tuple(out)
+
+
+def _read_solver(r, raw) -> SolverSettings:
+    raw = r.mapping(raw, "solver")
+    r.known_keys(raw, "solver", {"samples", "starts", "smoothing", "seed", "max_iter"})
+    kw = {}
+    for key, low in (("samples", 16), ("starts", 1), ("seed", 0), ("max_iter", 1)):
+        if key in raw:
+            kw[key] = r.integer(raw[key], f"solver.{key}", low)
+    if "smoothing" in raw:
+        kw["smoothing"] = r.number(raw["smoothing"], "solver.smoothing", positive=True)
+    return SolverSettings(**kw)
+
+
+class _Reader:
+    """Type checks that name the file and the key path of what is wrong."""
+
+    def __init__(self, where: str, prefix: str = ""):
+        self.where = where
+        self.prefix = prefix
+
+    def sub(self, key: str) -> "_Reader":
+        return _Reader(self.where, f"{self.prefix}{key}.")
+
+    def error(self, key: str, message: str) -> ProblemError:
+        key = f"{self.prefix}{key}".rstrip(".")
+        return ProblemError(f"{self.where}: {key} {message}" if key else
+                            f"{self.where}: {message}")
+
+    def mapping(self, value, key) -> dict:
+        if not isinstance(value, Mapping):
+            what = "the file" if not key and not self.prefix else key
+            raise (self.error(key, f"must be a mapping (got {type(value).__name__})") if
+                   what != "the file" else
+                   ProblemError(f"{self.where}: must hold a mapping of keys "
+                                f"(got {type(value).__name__})"))
+        for k in value:
+            if not isinstance(k, str):
+                raise self.error(key, f"has a key that is not text: {k!r}")
+        return dict(value)
+
+    def known_keys(self, value: Mapping, key: str, allowed: set[str]) -> None:
+        for k in value:
+            if k not in allowed:
+                path = f"{key}.{k}" if key else k
+                raise self.error(path, f"is not a known key; known: {', '.join(sorted(allowed))}")
+
+    def number(self, value, key, positive=False) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise self.error(key, f"must be a number (got {value!r})")
+        value = float(value)
+        if not math.isfinite(value):
+            raise self.error(key, f"must be finite (got {value})")
+        if positive and value <= 0:
+            raise self.error(key, f"must be positive (got {value:g})")
+        return value
+
+    def integer(self, value, key, minimum) -> int:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise self.error(key, f"must be an integer (got {value!r})")
+        if isinstance(value, float) and (not math.isfinite(value) or value != int(value)):
+            raise self.error(key, f"must be a whole number (got {value})")
+        if int(value) < minimum:
+            raise self.error(key, f"must be at least {minimum} (got {int(value)})")
+        return int(value)
+
+    def text(self, value, key) -> str:
+        if not isinstance(value, str):
+            raise self.error(key, f"must be text (got {value!r})")
+        return value

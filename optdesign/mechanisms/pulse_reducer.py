@@ -25,7 +25,10 @@ converter; n = 1 is the intermittent drive (output at rest for half a turn).
 
 Closed forms (tests): each drive advances its holder by 2r/R per turn, so with n = 2 the output
 advances 4r/R per turn and the ratio is 4·r1/(2π·R1); the largest holder speed is r/R = r1/R1 at
-cos φ = r (independent of ``a``); with n = 2 the output stops at the dead centres φ = 0, π.
+cos φ = r; with n = 2 the output stops at the dead centres φ = 0, π. For any n >= 2 the exact
+figures equal those of the sine limit a → ∞, θ_k' = (r1/R1)·sin(φ - α_k): ω_max/ω1 = r1/R1,
+ω_min/ω1 = (r1/R1)·cos(π/n), ratio (r1/R1)·n·sin(π/n)/π, at every a we tried (observed to
+rounding, not derived): ``a`` shapes the curves but not the figures.
 """
 from __future__ import annotations
 

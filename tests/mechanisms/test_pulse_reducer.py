@@ -42,13 +42,20 @@ def test_extremes_closed_form():
     assert f.delta_mean == pytest.approx(math.pi / 2, rel=1e-12)
 
 
-@pytest.mark.parametrize("a", [6.0, 20.0, 400.0])
-def test_two_freewheel_figures_do_not_depend_on_a(a):
-    """The paper omits a; with n = 2 none of the figures depends on it (module docstring)."""
-    ref, _ = exact_figures(design(), "forward", W1)
-    f, _ = exact_figures(design(a=a), "forward", W1)
-    for key in ("omega_max", "omega_min", "omega_mean", "delta", "ratio"):
-        assert getattr(f, key) == pytest.approx(getattr(ref, key), rel=1e-10, abs=1e-12)
+@pytest.mark.parametrize("a", [5.5, 50.0, 1e4])
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 6])
+def test_figures_closed_form_for_any_count_and_any_a(n, a):
+    """With the holders' speeds (r1/R1)·sin(φ - α_k) (the limit a → ∞) the envelope gives
+    ω_max = ω1·r1/R1, ω_min = ω1·(r1/R1)·cos(π/n) and a mean ω1·(r1/R1)·n·sin(π/n)/π (n >= 2;
+    n = 1: ω_min = 0, mean ω1·r1/(π·R1)). The same figures hold at every finite a we tried
+    (a/r1 from 1.1 to 2000), to rounding: pinned at rel 1e-11 (docs/mechanisms.md)."""
+    f, _ = exact_figures(design(a=a, freewheels=n), "forward", W1)
+    k = W1 * 5.0 / 250.0
+    low = k * math.cos(math.pi / n) if n >= 2 else 0.0
+    mean = k * n * math.sin(math.pi / n) / math.pi if n >= 2 else k / math.pi
+    assert f.omega_max == pytest.approx(k, rel=1e-11)
+    assert f.omega_min == pytest.approx(low, rel=1e-11, abs=1e-14)
+    assert f.omega_mean == pytest.approx(mean, rel=1e-11)
 
 
 def test_envelope_integral_is_the_papers_position_function():
@@ -129,13 +136,6 @@ def test_one_freewheel_is_intermittent():
     f, _ = exact_figures(design(freewheels=1), "forward", W1)
     assert f.ratio == pytest.approx(2 * 5.0 / (2 * math.pi * 250.0), rel=1e-12)
     assert f.omega_min == 0.0
-
-
-def test_more_freewheels_smooth_the_output():
-    """n = 3 pivots at 120°: the output never stops, and δ falls well below 2."""
-    f, _ = exact_figures(design(freewheels=3), "forward", W1)
-    assert f.omega_min > 0.4 * f.omega_max
-    assert f.delta < 1.0
 
 
 def test_design_constraint_is_r_below_one():

@@ -79,11 +79,12 @@ class Objective:
 
 @dataclass(frozen=True)
 class SolverSettings:
-    samples: int = 180                  # crank samples per turn in the NLP
-    starts: int = 8                     # multi-start count (low-discrepancy sample)
-    smoothing: float = 200.0            # KS aggregation parameter ρ (per unit of ω/ω1 scale)
+    samples: int = 90                   # crank samples per turn in the NLP (benchmarks/accuracy)
+    starts: int = 8                     # most starts (low-discrepancy sample) per phase count
+    agree: int = 2                      # stop once this many starts reach the same optimum
+    smoothing: float = 200.0            # log-sum-exp ρ, per unit of ω/ω1
     seed: int = 0
-    max_iter: int = 500
+    max_iter: int = 100                 # IPOPT iterations per start
 
 
 @dataclass(frozen=True)
@@ -344,9 +345,11 @@ def _read_regulation(r, raw) -> tuple[float, ...]:
 
 def _read_solver(r, raw) -> SolverSettings:
     raw = r.mapping(raw, "solver")
-    r.known_keys(raw, "solver", {"samples", "starts", "smoothing", "seed", "max_iter"})
+    r.known_keys(raw, "solver", {"samples", "starts", "agree", "smoothing", "seed",
+                                      "max_iter"})
     kw = {}
-    for key, low in (("samples", 16), ("starts", 1), ("seed", 0), ("max_iter", 1)):
+    for key, low in (("samples", 16), ("starts", 1), ("agree", 1), ("seed", 0),
+                     ("max_iter", 1)):
         if key in raw:
             kw[key] = r.integer(raw[key], f"solver.{key}", low)
     if "smoothing" in raw:

@@ -1,8 +1,6 @@
 """``optdesign curves PROBLEM.yaml [--out DIR]``: position, velocity and acceleration analogues."""
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 
@@ -21,6 +19,7 @@ def run(args) -> int:
     from ..curves import member_curves, plot_curves
     from ..design import Design
     from ..errors import ProblemError
+    from ..io import atomic_savefig
     from ..problem import load_problem
 
     problem = load_problem(args.problem)
@@ -34,27 +33,10 @@ def run(args) -> int:
     fig = plot_curves(curves, title=f"{problem.name}: {problem.mechanism}, "
                                     f"e = {args.eccentricity:g}")
     out = Path(args.out) if args.out else Path("results") / problem.name
-    path = save_figure(fig, out / "curves.png")
+    try:
+        path = atomic_savefig(fig, out / "curves.png", dpi=110)
+    finally:
+        import matplotlib.pyplot as plt
+        plt.close(fig)
     print(path)
     return 0
-
-
-def save_figure(fig, path: Path) -> Path:
-    """Write a PNG atomically: a temporary file in the same directory, then ``os.replace``."""
-    import matplotlib.pyplot as plt
-
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".png")
-    try:
-        with os.fdopen(fd, "wb") as handle:
-            fig.savefig(handle, format="png", dpi=110)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)              # mkstemp creates it owner-only
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
-    finally:
-        plt.close(fig)
-    return path

@@ -82,8 +82,9 @@ class PulseReducer(Mechanism):
         return {"theta": theta, "cos_mu": cos_mu, "joints": joints, "links": links}
 
     def design_constraints(self, p, count, constraints):
-        """The crank must stay inside the pivot circle, r < 1: a - r1 >= 0 (g >= 0)."""
-        return [("crank_inside_pivots", p["a"] - p["r1"])]
+        """The crank pin stays inside the pivot circle, r < 1 (eqs. 1-2):
+        1 - r1/a - assembly_margin >= 0 (g >= 0; dimensionless, O(1) for the NLP)."""
+        return [("crank_inside_pivots", 1 - p["r1"] / p["a"] - constraints.assembly_margin)]
 
     def check_values(self, values, count):
         if values["r1"] >= values["a"]:

@@ -73,8 +73,9 @@ class SlottedLever(Mechanism):
         return {"theta": theta, "cos_mu": cos_mu, "joints": joints, "links": links}
 
     def design_constraints(self, p, count, constraints):
-        """Link 7 oscillates only while its pivot lies beyond A's circle: XD - L >= 0 (g >= 0)."""
-        return [("pivot_outside_circle", p["XD"] - p["L"])]
+        """Link 7 oscillates only while its pivot D lies beyond A's circle, XD > L:
+        1 - L/XD - assembly_margin >= 0 (g >= 0; dimensionless, O(1) for the NLP)."""
+        return [("pivot_outside_circle", 1 - p["L"] / p["XD"] - constraints.assembly_margin)]
 
     def check_values(self, values, count):
         if values["XD"] <= values["L"]:

@@ -5,6 +5,7 @@ import math
 import casadi as ca
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 import yaml
 
 from optdesign.cli import main
@@ -193,3 +194,11 @@ def test_reverse_stroke_is_refused(write_problem, capsys):
     data = yaml.safe_load(PROBLEM.read_text()) | {"stroke": "reverse"}
     assert main(["analyze", str(write_problem(data))]) == 2
     assert "stroke must be one of forward (got 'reverse')" in capsys.readouterr().err
+
+
+@settings(max_examples=15, deadline=None)
+@given(r=st.floats(0.01, 0.98), r1=st.floats(1.0, 100.0), big_r1=st.floats(10.0, 1000.0))
+def test_ratio_closed_form_property(r, r1, big_r1):
+    """Any r < 1, any sizes: two freewheels give the ratio 4·r1/(2π·R1) (exact, rel 1e-10)."""
+    f, _ = exact_figures(design(r1=r1, a=r1 / r, R1=big_r1), "forward", 1.0)
+    assert f.ratio == pytest.approx(4 * r1 / (2 * math.pi * big_r1), rel=1e-10)

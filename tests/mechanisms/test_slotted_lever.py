@@ -6,6 +6,7 @@ import re
 import casadi as ca
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 import yaml
 
 from optdesign.cli import main
@@ -177,3 +178,13 @@ def test_bad_inputs(write_problem, capsys, changes, message):
     err = capsys.readouterr().err
     assert err.count("\n") == 1
     assert re.search(message, err), err
+
+
+@settings(max_examples=15, deadline=None)
+@given(xd=st.floats(100.0, 1000.0), fraction=st.floats(0.02, 0.9))
+def test_ratio_closed_form_property(xd, fraction):
+    """Any XD > L: stroke ``both`` collects 8·asin(L/(2XD - L)) per turn (exact, rel 1e-10)."""
+    big_l = fraction * xd
+    f, _ = exact_figures(design(XD=xd, L=big_l), "both", 1.0)
+    assert f.ratio == pytest.approx(8 * math.asin(big_l / (2 * xd - big_l)) / (2 * math.pi),
+                                    rel=1e-10)

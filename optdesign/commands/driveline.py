@@ -1,4 +1,4 @@
-"""``optdesign driveline PROBLEM.yaml [--out DIR]``: the cardan shaft's figure, DIR/driveline.png."""
+"""``optdesign driveline PROBLEM.yaml [--out DIR]``: the shaft's figure, DIR/driveline.png."""
 from __future__ import annotations
 
 import os

@@ -75,7 +75,7 @@ class DrivelineSection:
         return model.first_critical_speed(self.length, self.EI, self.mass_per_length)
 
     def figures(self, omega: float) -> dict:
-        """Every figure of the model at shaft speed ``omega`` (rad/s, below ω_cr), contract units."""
+        """Every figure of the model at shaft speed ``omega`` (rad/s, below ω_cr); mm, g·mm."""
         w_cr = self.critical_speed
         args = (w_cr, self.mass, self.EI, self.y0_max, self.length, self.A, self.C)
         y = model.deflection(omega, w_cr, self.y0_max)
@@ -271,8 +271,8 @@ def parse_section(raw, reader) -> DrivelineSection:
         raise reader.error("speed_factor", "applies only when operating_speed_rad_s is not given")
     factor = optional("speed_factor", 1.0)
     return DrivelineSection(length=length * 1e-3, A=planes["A_mm"] * 1e-3,
-                            C=planes["C_mm"] * 1e-3, mass_per_length=mass_per_length, EI=EI, y0_max=y0_max,
-                            y0_source=y0_source, balancing_speed=balancing,
+                            C=planes["C_mm"] * 1e-3, mass_per_length=mass_per_length, EI=EI,
+                            y0_max=y0_max, y0_source=y0_source, balancing_speed=balancing,
                             operating_speed=operating, speed_factor=factor, source=reader.where)
 
 

@@ -508,3 +508,19 @@ def test_analyze_of_a_design_that_does_not_assemble_keeps_the_shaft_figures():
     assert "D0_g_mm" not in out
     message = section.verify(problem, SimpleNamespace(assembles=False, strokes={}))
     assert message == "driveline: the design does not assemble, so it has no output speed"
+
+
+def test_the_constraint_bounds_a_speed_in_an_ipopt_nlp():
+    # The smallest NLP that uses it: push the output speed up (speed_factor 2) against the
+    # constraint; IPOPT must stop where 2·ω = 0.7·ω_cr (tolerance: IPOPT's default 1e-8).
+    import casadi as ca
+
+    problem = load(with_driveline(speed_factor=2.0))
+    section = problem.sections["driveline"]
+    w = ca.SX.sym("w")
+    (_, g), = section.solve_constraints(problem, w)
+    solver = ca.nlpsol("s", "ipopt", {"x": w, "f": -w / 100.0, "g": g},
+                       {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes"})
+    sol = solver(x0=10.0, lbx=0.0, lbg=0.0, ubg=ca.inf)
+    assert solver.stats()["success"]
+    assert float(sol["x"]) == pytest.approx(0.35 * section.critical_speed, rel=1e-6)

@@ -15,6 +15,7 @@ from .errors import OptDesignError, ProblemError
 COMMANDS = [
     "optdesign.commands.analyze",
     "optdesign.commands.solve",
+    "optdesign.commands.driveline",
     "optdesign.commands.curves",
 ]
 

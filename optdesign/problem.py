@@ -16,7 +16,9 @@ from .mechanisms import get_mechanism
 
 #: Optional sections parsed by the module that owns them, imported only when present:
 #: name -> "module:function(section_dict, where) -> parsed object".
-SECTION_PARSERS: dict[str, str] = {}
+SECTION_PARSERS: dict[str, str] = {
+    "driveline": "optdesign.driveline.section:parse_section",
+}
 
 TOP_KEYS = {"name", "mechanism", "input_speed", "stroke", "design", "options", "constraints",
             "objective", "regulation", "solver"}
@@ -185,10 +187,17 @@ def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "pro
         if key in top:
             module, func = target.split(":")
             sections[key] = getattr(import_module(module), func)(top[key], r.sub(key))
+    for key in constraints.extra:
+        owner = EXTRA_CONSTRAINT_SECTIONS.get(key)
+        if owner is not None and owner not in sections:
+            raise r.error(f"constraints.{key}", f"needs a {owner}: section")
     problem = Problem(name=name, mechanism=mechanism_name, input_speed=input_speed,
                       stroke=stroke, design=design, options=options, constraints=constraints,
                       objective=objective, eccentricities=ecc, solver=solver,
                       sections=sections, source=where)
+    for section in sections.values():
+        if hasattr(section, "check_problem"):
+            section.check_problem(problem)
     count = problem.count_variable.admissible()[0]
     try:
         mech.check_values(problem.start_values(), count)
@@ -274,7 +283,10 @@ def _read_options(r, raw, mech) -> dict[str, str]:
 
 
 #: constraint keys owned by other modules (e.g. the driveline), kept as given in ``extra``.
-EXTRA_CONSTRAINT_KEYS: set[str] = set()
+EXTRA_CONSTRAINT_KEYS: set[str] = {"max_speed_fraction_of_critical"}
+#: the section each of those keys needs; the section's object checks the value in its
+#: ``check_problem(problem)``.
+EXTRA_CONSTRAINT_SECTIONS: dict[str, str] = {"max_speed_fraction_of_critical": "driveline"}
 
 
 def _read_constraints(r, raw) -> Constraints:

@@ -87,7 +87,13 @@ def verify(problem, values: dict[str, float]) -> Verification:
     sections_verify = [(k, s) for k, s in problem.sections.items() if hasattr(s, "verify")]
     if sections_verify:
         from ..analysis import analyze
-        analysis = analyze(problem, design.values)
+        try:
+            analysis = analyze(problem, design.values)
+        except ProblemError as exc:          # e.g. the shaft would run past its critical speed
+            ver.feasible = False
+            ver.violations["sections"] = math.inf
+            ver.message = str(exc)
+            return ver
         for key, section in sections_verify:
             message = section.verify(problem, analysis)
             if message:

@@ -41,7 +41,7 @@ from .base import Mechanism, VariableSpec
 
 class SlottedLever(Mechanism):
     name = "slotted_lever"
-    source = "Vergov 2017, shared/seeds/001_e271d90910b06817.txt"
+    source = "Vergov (TU Sofia, 2017 grant), shared/seeds/001_e271d90910b06817.txt"
     variables = (
         VariableSpec("XD", "mm", "distance from stand 1 (O) to the pivot D of the kulisa-crank 7"),
         VariableSpec("L", "mm", "distance between the centres of stands 1 and 2 (regulated)"),

@@ -38,6 +38,8 @@ IPOPT_OPTIONS = {
     "ipopt.mu_strategy": "adaptive",
     "ipopt.nlp_scaling_method": "gradient-based",
     "ipopt.sb": "yes",
+    "ipopt.bound_relax_factor": 0.0,          # bounds are the designer's: keep them exactly
+    "ipopt.constr_viol_tol": 1e-8,
     "print_time": False,
 }
 
@@ -247,6 +249,24 @@ class PhaseNLP:
                 lbx[sl] = 0.0
         return lbx, ubx
 
+    def at_window_bound(self, x, lbx, ubx, tol: float = 1e-6) -> bool:
+        """True when a tracked angle (peak or hand-over) ended on the edge of its window:
+        the point moved further than the window allows, so the driver re-centres and
+        re-solves."""
+        for block in self.layout.x:
+            if block.name.startswith(("phi_peak", "phi_handover")):
+                sl = slice(block.start, block.start + block.size)
+                if np.any(x[sl] - lbx[sl] < tol) or np.any(ubx[sl] - x[sl] < tol):
+                    return True
+        return False
+
+    def lengths_of(self, x: np.ndarray) -> dict[str, float]:
+        """The free lengths in mm, clipped to their bounds (IPOPT may relax a bound by ~1e-8)."""
+        sl = self.layout.find(self.layout.x, "lengths")
+        P = self.problem
+        return {k: float(np.clip(v * s, P.design[k].lower, P.design[k].upper))
+                for k, v, s in zip(self.free, x[sl], self.scale)}
+
     def pack(self, guess: dict) -> np.ndarray:
         x0 = np.zeros(self.n_x)
         for block in self.layout.x:
@@ -256,6 +276,3 @@ class PhaseNLP:
     def unpack(self, x: np.ndarray) -> dict:
         return {b.name: np.array(x[b.start:b.start + b.size]) for b in self.layout.x}
 
-    def lengths_of(self, x: np.ndarray) -> dict[str, float]:
-        sl = self.layout.find(self.layout.x, "lengths")
-        return {k: float(v * s) for k, v, s in zip(self.free, x[sl], self.scale)}

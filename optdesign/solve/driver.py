@@ -73,6 +73,7 @@ class PhaseSolver:
         start = dict(values)
         t0 = time.perf_counter()
         iterations, extra_angle, status, surrogate = 0, ANGLE_SAFETY_DEG, "not run", None
+        multiplier = None
         note = ""
         for _ in range(MAX_REFINEMENTS):
             if not ver.sequences:
@@ -88,6 +89,9 @@ class PhaseSolver:
             status = stats["return_status"]
             iterations += int(stats["iter_count"])
             x = np.array(sol["x"]).ravel()
+            # d f*/d lbg = -lam_g (CasADi's sign convention for a lower bound)
+            multiplier = -float(np.array(sol["lam_g"]).ravel()[
+                nlp.layout.find(nlp.layout.g, "min_ratio")][0])
             at_window = nlp.at_window_bound(x, lbx, ubx)
             trial = values | nlp.lengths_of(x)
             new = verify(problem, trial)
@@ -108,7 +112,7 @@ class PhaseSolver:
         record = StartRecord(start=start, ipopt_status=status, iterations=iterations,
                              time_s=time.perf_counter() - t0,
                              feasible=bool(ver.feasible and status in SUCCESS),
-                             delta=ver.delta, note=note)
+                             delta=ver.delta, note=note, ratio_multiplier=multiplier)
         return record, ver, values, surrogate
 
 

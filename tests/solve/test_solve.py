@@ -134,3 +134,13 @@ def test_problem_given_in_code():
     data = disc()
     p = problem_from_dict(data, where="notebook")
     assert p.free_lengths() == ["l0", "l2", "l2_prime", "l3"]
+
+
+def test_nothing_assembles_within_the_bounds(write_problem, capsys):
+    data = disc(design={**disc()["design"], "l3": {"lower": 1, "upper": 2}})
+    assert main(["solve", str(write_problem(data)), "--json", "--no-plots", "--out",
+                 str(write_problem(data).parent / "o")]) == 1
+    result = json.loads(capsys.readouterr().out)
+    assert result["status"] == "infeasible"
+    assert result["per_phase"][0]["binding"] == "assembly"
+    assert "no design within the bounds assembles" in result["per_phase"][0]["message"]

@@ -144,3 +144,12 @@ def test_nothing_assembles_within_the_bounds(write_problem, capsys):
     assert result["status"] == "infeasible"
     assert result["per_phase"][0]["binding"] == "assembly"
     assert "no design within the bounds assembles" in result["per_phase"][0]["message"]
+
+
+def test_grashof_constraint_is_wired_and_met(write_problem):
+    data = disc(constraints={**disc()["constraints"], "grashof": True})
+    r = solve(load_problem(write_problem(data)))
+    assert r.status == "optimal"
+    d = r.design
+    longest = max(d["l0"], d["l2"], d["l3"])
+    assert d["l1"] + longest <= d["l0"] + d["l2"] + d["l3"] - longest + 1e-6

@@ -16,7 +16,9 @@ from .mechanisms import get_mechanism
 
 #: Optional sections parsed by the module that owns them, imported only when present:
 #: name -> "module:function(section_dict, where) -> parsed object".
-SECTION_PARSERS: dict[str, str] = {}
+SECTION_PARSERS: dict[str, str] = {
+    "dynamics": "optdesign.dynamics.section:parse_section",
+}
 
 TOP_KEYS = {"name", "mechanism", "input_speed", "stroke", "design", "options", "constraints",
             "objective", "regulation", "solver"}

@@ -62,7 +62,7 @@ def transmission_angles(design: Design, eccentricity: float = 1.0,
                               bounds=(phi[j] - h, phi[j] + h), method="bounded",
                               options={"xatol": 1e-10})
         c = min(max(-res.fun, abs(cos_mu[k, j])), 1.0)
-        worst.append(90.0 - np.degrees(np.arccos(c)))   # min(μ, 180-μ) = 90° - acos|cos μ|
+        worst.append(np.degrees(np.arccos(c)))          # min(μ, 180° - μ) = acos|cos μ|
     return np.array(worst)
 
 

@@ -14,6 +14,9 @@ from .errors import OptDesignError, ProblemError
 #: Each command is a module with ``add_parser(subparsers)`` and ``run(args) -> exit code``.
 COMMANDS = [
     "optdesign.commands.analyze",
+    "optdesign.commands.solve",
+    "optdesign.commands.driveline",
+    "optdesign.commands.curves",
 ]
 
 

@@ -17,6 +17,7 @@ from .mechanisms import get_mechanism
 #: Optional sections parsed by the module that owns them, imported only when present:
 #: name -> "module:function(section_dict, where) -> parsed object".
 SECTION_PARSERS: dict[str, str] = {
+    "driveline": "optdesign.driveline.section:parse_section",
     "dynamics": "optdesign.dynamics.section:parse_section",
 }
 
@@ -81,11 +82,12 @@ class Objective:
 
 @dataclass(frozen=True)
 class SolverSettings:
-    samples: int = 180                  # crank samples per turn in the NLP
-    starts: int = 8                     # multi-start count (low-discrepancy sample)
-    smoothing: float = 200.0            # KS aggregation parameter ρ (per unit of ω/ω1 scale)
+    samples: int = 90                   # crank samples per turn in the NLP (benchmarks/accuracy)
+    starts: int = 8                     # most starts (low-discrepancy sample) per phase count
+    agree: int = 2                      # stop once this many starts reach the same optimum
+    smoothing: float = 200.0            # log-sum-exp ρ, per unit of ω/ω1
     seed: int = 0
-    max_iter: int = 500
+    max_iter: int = 100                 # IPOPT iterations per start
 
 
 @dataclass(frozen=True)
@@ -186,10 +188,17 @@ def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "pro
         if key in top:
             module, func = target.split(":")
             sections[key] = getattr(import_module(module), func)(top[key], r.sub(key))
+    for key in constraints.extra:
+        owner = EXTRA_CONSTRAINT_SECTIONS.get(key)
+        if owner is not None and owner not in sections:
+            raise r.error(f"constraints.{key}", f"needs a {owner}: section")
     problem = Problem(name=name, mechanism=mechanism_name, input_speed=input_speed,
                       stroke=stroke, design=design, options=options, constraints=constraints,
                       objective=objective, eccentricities=ecc, solver=solver,
                       sections=sections, source=where)
+    for section in sections.values():
+        if hasattr(section, "check_problem"):
+            section.check_problem(problem)
     count = problem.count_variable.admissible()[0]
     try:
         mech.check_values(problem.start_values(), count)
@@ -275,7 +284,10 @@ def _read_options(r, raw, mech) -> dict[str, str]:
 
 
 #: constraint keys owned by other modules (e.g. the driveline), kept as given in ``extra``.
-EXTRA_CONSTRAINT_KEYS: set[str] = set()
+EXTRA_CONSTRAINT_KEYS: set[str] = {"max_speed_fraction_of_critical"}
+#: the section each of those keys needs; the section's object checks the value in its
+#: ``check_problem(problem)``.
+EXTRA_CONSTRAINT_SECTIONS: dict[str, str] = {"max_speed_fraction_of_critical": "driveline"}
 
 
 def _read_constraints(r, raw) -> Constraints:
@@ -346,9 +358,11 @@ def _read_regulation(r, raw) -> tuple[float, ...]:
 
 def _read_solver(r, raw) -> SolverSettings:
     raw = r.mapping(raw, "solver")
-    r.known_keys(raw, "solver", {"samples", "starts", "smoothing", "seed", "max_iter"})
+    r.known_keys(raw, "solver", {"samples", "starts", "agree", "smoothing", "seed",
+                                      "max_iter"})
     kw = {}
-    for key, low in (("samples", 16), ("starts", 1), ("seed", 0), ("max_iter", 1)):
+    for key, low in (("samples", 16), ("starts", 1), ("agree", 1), ("seed", 0),
+                     ("max_iter", 1)):
         if key in raw:
             kw[key] = r.integer(raw[key], f"solver.{key}", low)
     if "smoothing" in raw:

@@ -9,6 +9,8 @@ from .base import STROKE_SIGNS, Mechanism, OptionSpec, VariableSpec
 #: name -> "module:Class"; a new mechanism is one module and one line here.
 REGISTRY: dict[str, str] = {
     "fourbar_converter": "optdesign.mechanisms.fourbar_converter:FourBarConverter",
+    "pulse_reducer": "optdesign.mechanisms.pulse_reducer:PulseReducer",
+    "slotted_lever": "optdesign.mechanisms.slotted_lever:SlottedLever",
 }
 
 _instances: dict[str, Mechanism] = {}

@@ -1,0 +1,73 @@
+"""Results of ``optdesign solve``: plain dataclasses with ``to_dict()`` (the contract's keys)."""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+
+@dataclass
+class StartRecord:
+    """One IPOPT run from one start design."""
+
+    start: dict[str, float]
+    ipopt_status: str
+    iterations: int
+    time_s: float
+    feasible: bool
+    delta: float | None          # exact δ of the returned point (None if it does not assemble)
+    note: str = ""
+
+
+@dataclass
+class PhaseResult:
+    """The optimum of one phase count, re-verified by the exact evaluator."""
+
+    phases: int
+    status: str                  # optimal | infeasible | failed
+    design: dict[str, float] | None = None
+    delta: float | None = None                   # exact, worst over the listed eccentricities
+    ratio: float | None = None                   # exact, at e = 1
+    min_transmission_angle_deg: float | None = None
+    surrogate_delta: float | None = None         # what the NLP believed
+    surrogate_gap: float | None = None           # surrogate - exact (conservative: >= 0)
+    iterations: int = 0
+    starts: list[StartRecord] = field(default_factory=list)
+    binding: str | None = None                   # the constraint that binds when infeasible
+    message: str = ""
+    regulation: list[dict] = field(default_factory=list)   # exact figures per eccentricity
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass
+class SolveResult:
+    """What ``optdesign solve`` writes to result.json (shared/DESIGN.md section 3)."""
+
+    name: str
+    status: str
+    design: dict[str, float] | None
+    delta: float | None
+    ratio: float | None
+    min_transmission_angle_deg: float | None
+    solve_time_s: float
+    iterations: int
+    per_phase: list[PhaseResult]
+    objective: dict
+    accuracy: dict
+    message: str = ""
+    stroke: str = "forward"
+    mechanism: str = ""
+    input_speed: float = 0.0
+    sections: dict = field(default_factory=dict)
+
+    def best_phase(self) -> PhaseResult | None:
+        if self.design is None:
+            return None
+        return next(p for p in self.per_phase if p.design == self.design)
+
+    def to_dict(self) -> dict:
+        out = asdict(self)
+        out["per_phase"] = [p.to_dict() for p in self.per_phase]
+        sections = out.pop("sections")
+        out.update(sections)
+        return out

@@ -1,0 +1,30 @@
+"""Shared fixtures: the paper's design and a writer of problem files."""
+from pathlib import Path
+
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+PAPER = dict(l0=225.0, l1=20.0, l2=225.0, l2_prime=100.0, l3=56.0, phases=6)
+
+
+@pytest.fixture
+def paper_design():
+    from optdesign.design import Design
+    return Design("fourbar_converter", dict(PAPER))
+
+
+@pytest.fixture
+def write_problem(tmp_path):
+    """Write a problem mapping (or raw text) to a YAML file and return its path."""
+    def write(data, name="p.yaml"):
+        path = tmp_path / name
+        path.write_text(data if isinstance(data, str) else yaml.safe_dump(data))
+        return path
+    return write
+
+
+def base_problem(**changes):
+    data = yaml.safe_load((ROOT / "problems" / "sharkov2022.yaml").read_text())
+    data.update(changes)
+    return data

@@ -1,0 +1,123 @@
+"""Every error a user can meet in a problem file: exit code 2, one line naming file and key."""
+import subprocess
+import sys
+
+import pytest
+
+from optdesign.cli import main
+from optdesign.errors import ProblemError
+from optdesign.problem import load_problem
+from tests.conftest import ROOT, base_problem
+
+
+def test_the_paper_problem_loads():
+    p = load_problem(ROOT / "problems" / "sharkov2022.yaml")
+    assert p.mechanism == "fourbar_converter"
+    assert p.counts() == [6]
+    assert p.free_lengths() == []
+    assert p.eccentricities == (1.0, 0.5, 0.25)
+
+
+def design(**changes):
+    d = base_problem()["design"]
+    d.update(changes)
+    return base_problem(design=d)
+
+
+BAD = [
+    (design(l3="long"), r"p\.yaml: design\.l3 must be a number \(got 'long'\)"),
+    (design(l3=-5), r"p\.yaml: design\.l3 must be positive \(got -5\)"),
+    (design(l3=0), r"p\.yaml: design\.l3 must be positive \(got 0\)"),
+    (design(l3=float("nan")), r"p\.yaml: design\.l3 must be finite"),
+    (design(l3=float("inf")), r"p\.yaml: design\.l3 must be finite"),
+    (design(l3=True), r"p\.yaml: design\.l3 must be a number"),
+    (design(l2={"lower": 300, "upper": 100}),
+     r"p\.yaml: design\.l2\.upper must not be below lower \(got 100 < 300\)"),
+    (design(l2={"lower": 100}), r"p\.yaml: design\.l2\.upper is required"),
+    (design(l2={"lower": 100, "upper": 300, "initial": 400}),
+     r"p\.yaml: design\.l2\.initial must lie within \[100, 300\]"),
+    (design(l2={"lower": 100, "upper": 300, "step": 1}),
+     r"p\.yaml: design\.l2\.step is not a known key"),
+    (design(phases=1), r"p\.yaml: design\.phases must be at least 2 \(got 1\)"),
+    (design(phases=4.5), r"p\.yaml: design\.phases must be a whole number \(got 4\.5\)"),
+    (design(phases={"lower": 6, "upper": 3}), r"design\.phases\.upper must not be below lower"),
+    (design(phases={"choices": []}), r"design\.phases\.choices must be a non-empty list"),
+    (design(phases={"choices": [4, 1]}), r"design\.phases\.choices must be at least 2"),
+    (design(l9=3), r"p\.yaml: design\.l9 is not a known key; known: l0, l1, l2"),
+    (design(l1=300), r"p\.yaml: design\.l1 must be shorter than l0"),
+    (base_problem(mechanism="cam"),
+     r"p\.yaml: mechanism unknown mechanism 'cam'; known: .*fourbar_converter"),
+    (base_problem(stroke="sideways"),
+     r"p\.yaml: stroke must be one of forward, reverse \(got 'sideways'\)"),
+    (base_problem(input_speed=-1), r"p\.yaml: input_speed must be positive"),
+    (base_problem(colour="red"), r"p\.yaml: colour is not a known key"),
+    (base_problem(objective={"ripple": "rms"}), r"objective\.ripple must be one of midrange, mean"),
+    (base_problem(objective={"minimize": "-ratio"}),
+     r"objective\.max_ripple is required when minimize is -ratio"),
+    (base_problem(objective={"minimize": "cost"}), r"objective\.minimize must be one of"),
+    (base_problem(objective={"min_ratio": -0.1}), r"objective\.min_ratio must not be negative"),
+    (base_problem(constraints={"min_transmission_angle_deg": 95}),
+     r"constraints\.min_transmission_angle_deg must lie in \[0, 90\)"),
+    (base_problem(constraints={"grashof": "yes"}), r"constraints\.grashof must be true or false"),
+    (base_problem(regulation={"eccentricity": [1.0, 1.5]}),
+     r"regulation\.eccentricity fractions must lie in \(0, 1\]"),
+    (base_problem(regulation={"eccentricity": []}), r"regulation\.eccentricity must be a non-empty"),
+    (base_problem(options={"branch": "up"}), r"options\.branch must be one of left, right"),
+    (base_problem(solver={"samples": 4}), r"solver\.samples must be at least 16"),
+    (base_problem(design=[1, 2]), r"p\.yaml: design must be a mapping \(got list\)"),
+]
+
+
+@pytest.mark.parametrize("data,message", BAD, ids=[m[:40] for _, m in BAD])
+def test_bad_input_is_named(write_problem, data, message):
+    path = write_problem(data)
+    with pytest.raises(ProblemError, match=message):
+        load_problem(path)
+
+
+@pytest.mark.parametrize("text,message", [
+    ("", r"p\.yaml: the file is empty"),
+    ("design: [1, 2\n  : :", r"p\.yaml: not valid YAML at line \d+"),
+    ("- just\n- a list\n", r"p\.yaml: must hold a mapping of keys \(got list\)"),
+    ("mechanism: fourbar_converter\ninput_speed: 1\n", r"p\.yaml: design is required"),
+    ("input_speed: 1\n", r"p\.yaml: mechanism is required"),
+])
+def test_unreadable_files(write_problem, text, message):
+    with pytest.raises(ProblemError, match=message):
+        load_problem(write_problem(text))
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(ProblemError, match=r"no such file"):
+        load_problem(tmp_path / "absent.yaml")
+
+
+def test_missing_design_key(write_problem):
+    data = base_problem()
+    del data["design"]["l3"]
+    with pytest.raises(ProblemError, match=r"p\.yaml: design\.l3 is required \(rockers"):
+        load_problem(write_problem(data))
+
+
+def test_cli_bad_input_exits_2_with_one_line(write_problem, capsys):
+    path = write_problem(design(l3=-5))
+    assert main(["analyze", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "design.l3 must be positive" in err and "Traceback" not in err
+
+
+def test_cli_usage_error_exits_2():
+    proc = subprocess.run([sys.executable, "-m", "optdesign", "analyze"], capture_output=True,
+                          text=True)
+    assert proc.returncode == 2
+    assert "Traceback" not in proc.stderr and proc.stderr.count("\n") == 1
+
+
+def test_collapsed_bounds_fix_the_variable(write_problem):
+    p = load_problem(write_problem(design(l2={"lower": 225, "upper": 225})))
+    assert not p.design["l2"].is_free and p.design["l2"].value == 225
+
+
+def test_phase_choices_and_ranges(write_problem):
+    assert load_problem(write_problem(design(phases={"choices": [8, 4, 4]}))).counts() == [4, 8]
+    assert load_problem(write_problem(design(phases={"lower": 3, "upper": 5}))).counts() == [3, 4, 5]

@@ -54,6 +54,7 @@ class SimulationResult:
     counters: dict
     wall_time_s: float
     instants: dict
+    first_turn: dict
     switches: list
     labels: list
     trace: dict = field(repr=False, default_factory=dict)
@@ -61,6 +62,8 @@ class SimulationResult:
     @property
     def power_balance(self) -> float:
         """(P_in - P_out)/P_in over the steady cycle: 0 for lossless freewheels."""
+        if self.power_in_w == 0:
+            return float("nan")
         return (self.power_in_w - self.power_out_w) / self.power_in_w
 
     def to_dict(self) -> dict:
@@ -78,7 +81,8 @@ class SimulationResult:
             "power_balance": self.power_balance,
             "steps": self.steps, "events": self.events, "cycles": self.cycles,
             "steady": self.steady, "steady_residual": self.steady_residual,
-            "instants": self.instants, "switches": self.switches,
+            "instants": self.instants, "first_turn": self.first_turn,
+            "switches": self.switches,
             "model": {"freewheel": self.freewheel, "crank": self.crank, "method": self.method,
                       "rtol": self.rtol, "atol": self.atol},
             "counters": self.counters, "wall_time_s": self.wall_time_s,
@@ -110,10 +114,14 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
     integ = Integrator(model, method, section.rtol, section.atol)
     clock = time.perf_counter()
     y, mode = _initial_state(model)
+    lead = int(np.argmax(mode.engaged))
     previous, residual, steady, turns = None, np.inf, False, 0
+    first_turn = None
     while turns < section.cycles:
         y_end, mode, events, period = integ.run_turn(y, mode)
         turns += 1
+        if first_turn is None:
+            first_turn = _first_turn(events, model.labels(), lead)
         y, mode = _rebase(model, y_end, mode)
         signature = _signature(model, y, mode, period)
         if previous is not None:
@@ -154,6 +162,7 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
         counters={"nfev": c.nfev, "njev": c.njev, "nlu": c.nlu, "segments": c.segments,
                   "steady_cycle_events": sum(e.kind != "eps_max" for e in events)},
         wall_time_s=wall, instants=_instants(events, period, labels),
+        first_turn=first_turn or _first_turn(events, labels, lead),
         switches=[{"t_s": e.t, "phi_deg": float(np.degrees(e.phi)), "kind": e.kind,
                    "freewheel": labels[e.wheel]} for e in events],
         labels=labels,
@@ -163,16 +172,16 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
 
 
 def _initial_state(model: DriveModel) -> tuple[np.ndarray, Mode]:
-    """Crank at ω1, output at the rigid output speed: ``ratchet`` released just below it,
-    ``composite`` engaged with ε = 0 (c = Φ(0), the paper's start of jamming)."""
+    """The paper's start: crank at φ = 0 turning at ω1, the leading freewheel just closed
+    (ε = 0) and the output turning with its holder (at rest at a dead centre)."""
     w = model.input_speed
     u, du, _ = model.holders(0.0)
-    lead = max(float(du.max()), 0.0) * w
-    if model.composite:
-        mode = Mode(np.ones(1, bool), np.array([float(u[0])]))
-        return np.array([0.0, w, 0.0, lead, 0.0, 0.0]), mode
-    mode = Mode(np.zeros(model.size, bool), np.zeros(model.size))
-    return np.array([0.0, w, 0.0, 0.999 * lead, 0.0, 0.0]), mode
+    lead = int(np.argmax(du))
+    engaged = np.zeros(model.size, bool)
+    engaged[lead] = True
+    offset = np.where(engaged, u, 0.0)
+    return np.array([0.0, w, 0.0, max(float(du[lead]), 0.0) * w, 0.0, 0.0]), \
+        Mode(engaged, offset)
 
 
 def _rebase(model: DriveModel, y: np.ndarray, mode: Mode) -> tuple[np.ndarray, Mode]:
@@ -228,5 +237,26 @@ def _instants(events, period, labels) -> dict:
     t3 = next((t for t, e in rel if e.kind == "engage" and t2 is not None and t > t2), None)
     if t3 is None and t2 is not None:
         t3 = period                       # only this engagement per turn: it comes back
-    return {"freewheel": labels[wheel], "t0_in_turn_s": first.t, "t1_s": t1, "t2_s": t2,
-            "t3_s": t3}
+    return {"freewheel": labels[wheel], "t0_in_turn_s": float(first.t),
+            "t1_s": t1 and float(t1), "t2_s": t2 and float(t2), "t3_s": t3 and float(t3)}
+
+
+def _first_turn(events, labels, wheel: int) -> dict:
+    """The same instants in the first turn from the start state, t = 0 at φ = 0 where
+    freewheel ``wheel`` has just closed: the paper's single computed cycle. t1, t2 are that
+    freewheel's ε maximum and release, t3 the next closing of any freewheel after t2."""
+    def first(kind, after=-1.0, own=True):
+        return next((e for e in events if e.kind == kind and e.t > after
+                     and (e.wheel == wheel) == own), None)
+
+    t1, t2 = first("eps_max"), first("release")
+    t3 = None
+    if t2 is not None:
+        t3 = first("engage", t2.t, own=False) or first("engage", t2.t)
+        if t3 is not None and labels[t3.wheel] == labels[wheel] and len(labels) > 1:
+            t3 = min((e for e in events if e.kind == "engage" and e.t > t2.t),
+                     key=lambda e: e.t)
+    return {"freewheel": labels[wheel], "t1_s": t1 and float(t1.t),
+            "t2_s": t2 and float(t2.t), "t3_s": t3 and float(t3.t),
+            "t3_freewheel": t3 and labels[t3.wheel],
+            "eps_max": t1 and float(t1.eps)}

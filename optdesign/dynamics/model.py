@@ -54,7 +54,8 @@ class Load:
                 ang = np.concatenate([[ang[-1] - TWO_PI], ang, [ang[0] + TWO_PI]])
                 tq = np.concatenate([[tq[-1]], tq, [tq[0]]])
             self.angle, self.torque = ang, tq
-            self.mean = float(np.trapz(tq, ang) / (ang[-1] - ang[0]))
+            area = np.sum(0.5 * (tq[1:] + tq[:-1]) * np.diff(ang))
+            self.mean = float(area / (ang[-1] - ang[0]))
         else:
             self.value = float(load)
             self.mean = self.value

@@ -12,7 +12,7 @@ Keys (SI units, as in the paper)::
       damping_ratio: 0       # ζ of the freewheel, c = 2ζ·√(λ·I2); 0 in the paper (ratchet only)
       motor: {a: 230, b: 2.35}   # static characteristic T = a - b·ω (N·m, N·m·s)
       load: 15               # N·m resisting the output; or {angle_deg: [...], torque: [...]}
-      cycles: 200            # most crank turns simulated while waiting for the steady cycle
+      cycles: 200            # most crank turns simulated, the reported (last) one included
       reduction: 1.0         # freewheel holder angle per radian of the mechanism's output member
       freewheel: ratchet     # ratchet (each freewheel slips, engages at speed match) | composite
       crank: dynamic         # dynamic (two-mass, motor characteristic) | constant (φ = ω1·t)

@@ -117,7 +117,7 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
     lead = int(np.argmax(mode.engaged))
     previous, residual, steady, turns = None, np.inf, False, 0
     first_turn = None
-    while turns < section.cycles:
+    while turns < section.cycles - 1:          # the last allowed turn is the recorded one
         y_end, mode, events, period = integ.run_turn(y, mode)
         turns += 1
         if first_turn is None:
@@ -163,8 +163,8 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
                   "steady_cycle_events": sum(e.kind != "eps_max" for e in events)},
         wall_time_s=wall, instants=_instants(events, period, labels),
         first_turn=first_turn or _first_turn(events, labels, lead),
-        switches=[{"t_s": e.t, "phi_deg": float(np.degrees(e.phi)), "kind": e.kind,
-                   "freewheel": labels[e.wheel]} for e in events],
+        switches=[{"t_s": float(e.t), "phi_deg": float(np.degrees(e.phi)), "kind": e.kind,
+                   "freewheel": labels[e.wheel], "eps": e.eps} for e in events],
         labels=labels,
         trace={"t": t, "phi": ys[0], "omega_in": ys[1], "psi": ys[2] - start[2],
                "omega_out": ys[3], "eps": eps, "engaged": engaged,

@@ -12,6 +12,8 @@ Switching rules (see :mod:`optdesign.dynamics.model`):
 - engaged freewheel k: released when its torque λ_k·ε_k + c_k·ε̇_k falls through 0;
 - released, ``ratchet``: engaged when the relative speed ε̇_k rises through 0 (reference reset);
 - released, ``composite``: engaged when ε rises through 0 (Φ has caught up with ψ);
+- output moving: it stops when ψ̇ falls to 0 and the freewheels cannot overcome the load;
+  output at rest: it starts when Σ λ_k·ε_k rises above T_c;
 - a release with ε̇_k ≈ 0 whose free flight would end within ``GRAZE`` of a turn is a graze:
   the freewheel stays engaged (reference reset to ε_k = 0), instead of a burst of zero-length
   segments (chattering).
@@ -125,7 +127,7 @@ class Integrator:
                 y[0] = stop                      # exact, so the next turn starts on 2π·m
                 if stop >= phi_end - 1e-12:
                     return y, mode, events, t
-            for kind, wheel in fired:
+            for kind, wheel in sorted(fired, key=lambda f: f[0].startswith("output")):
                 if kind != "stop":
                     mode = self._switch(kind, wheel, y, mode, t, events)
 
@@ -147,6 +149,12 @@ class Integrator:
         stop_event.terminal, stop_event.direction = True, 1.0
         funcs.append(stop_event)
         kinds.append(("stop", -1))
+        if mode.stuck:                                  # output at rest: starts when driven
+            funcs.append(_event(lambda y: model.drive_margin(y, mode), True, 1.0))
+            kinds.append(("output_starts", -1))
+        elif model.load.mean > 0:                       # moving: stops when ψ̇ reaches 0
+            funcs.append(_event(lambda y: y[3] + self.eta * model.input_speed, True, -1.0))
+            kinds.append(("output_stops", -1))
         for k in range(model.size):
             if mode.engaged[k]:
                 funcs.append(_event(lambda y, k=k: model.release_function(y, mode)[k]
@@ -165,6 +173,13 @@ class Integrator:
 
     def _switch(self, kind, k, y, mode: Mode, t, events) -> Mode:
         model = self.model
+        if kind in ("output_stops", "output_starts"):
+            stuck = kind == "output_stops" and model.drive_margin(y, mode) <= 0.0
+            if kind == "output_stops":
+                y[3] = 0.0          # held: exactly at rest (the event was ψ̇ = -η·ω1)
+            self.counters.events += 1
+            events.append(Event(t, y[0], kind, -1))
+            return Mode(mode.engaged, mode.offset, stuck)
         engaged, offset = mode.engaged.copy(), mode.offset.copy()
         u, _, _, _, rel_speed, _ = model.forces(y, mode)
         if kind == "release":
@@ -182,7 +197,7 @@ class Integrator:
             if not model.composite:
                 offset[k] = u[k] - y[2]
         self.counters.events += 1
-        new = Mode(engaged, offset)
+        new = Mode(engaged, offset, mode.stuck)
         events.append(Event(t, y[0], kind, k, float(model.forces(y, new)[3][k])))
         return new
 

@@ -14,7 +14,9 @@ lets the ringing of stiff freewheels decay. Lagrange's equations with kinetic en
     I1·φ̈ = a - b·φ̇ - Σ_k λ_k·ε_k·u_k'(φ)      (the reaction reaches the crank through u_k')
     I2·ψ̈ = Σ_k λ_k·ε_k - T_c(ψ)
 
-and, with every freewheel released, eq. (4): I1·φ̈ = a - b·φ̇, I2·ψ̈ = -T_c. Jamming (ε rising),
+and, with every freewheel released, eq. (4): I1·φ̈ = a - b·φ̇, I2·ψ̈ = -T_c. The load
+resists: it brakes the output but never turns it backwards, so an output that comes to rest
+stays there (ψ̇ = 0) until the freewheel torque exceeds T_c again. Jamming (ε rising),
 joint motion and overrun (ε back to 0, the output faster than the holder) are not imposed: they
 follow from these equations and from the switching rule of the freewheel model:
 
@@ -166,10 +168,12 @@ def _wrapped(angle):
 
 @dataclass
 class Mode:
-    """The discrete state: which freewheels are engaged, and their references c_k."""
+    """The discrete state: which freewheels are engaged, their references c_k, and whether
+    the output is held at rest by its load (a resisting load does not turn it backwards)."""
 
     engaged: np.ndarray        # bool per freewheel
     offset: np.ndarray         # c_k, rad
+    stuck: bool = False        # ψ̇ = 0 while the freewheel torque does not exceed T_c
 
 
 class DriveModel:
@@ -235,8 +239,15 @@ class DriveModel:
         else:
             motor = self.motor_torque(y[1])
             accel_in, power_in = (motor - reaction) / self.I1, motor * y[1]
+        if mode.stuck:
+            return np.array([y[1], accel_in, 0.0, 0.0, power_in, 0.0])
         accel_out = (torque.sum() - load) / self.I2
         return np.array([y[1], accel_in, y[3], accel_out, power_in, load * y[3]])
+
+    def drive_margin(self, y, mode: Mode) -> float:
+        """Σ_k λ_k·ε_k minus the load: the output at rest starts when it turns positive."""
+        load, _ = self.load(y[2] + self.psi_origin)
+        return float(self.forces(y, mode)[5].sum() - load)
 
     def jacobian(self, y, mode: Mode) -> np.ndarray:
         """∂(dy/dt)/∂y, analytic (the implicit integrators' Newton matrix)."""
@@ -261,6 +272,9 @@ class DriveModel:
             jac[1] = [-r_phi / self.I1, (-self.b - r_w) / self.I1, -r_psi / self.I1,
                       -r_W / self.I1, 0.0, 0.0]
             jac[4, 1] = self.a - 2.0 * self.b * w
+        if mode.stuck:
+            jac[2, 3] = 0.0
+            return jac
         jac[3] = [f_phi.sum() / self.I2, f_w.sum() / self.I2, (f_psi.sum() - slope) / self.I2,
                   f_W.sum() / self.I2, 0.0, 0.0]
         jac[5, 2] = slope * y[3]
@@ -269,7 +283,7 @@ class DriveModel:
 
     def free_acceleration(self, y, mode: Mode, k: int) -> float:
         """ε̈_k with freewheel k released: > 0 means it would re-engage at once (a graze)."""
-        trial = Mode(mode.engaged.copy(), mode.offset)
+        trial = Mode(mode.engaged.copy(), mode.offset, mode.stuck)
         trial.engaged[k] = False
         dy = self.rhs(y, trial)
         _, du, ddu = self.holders(y[0])

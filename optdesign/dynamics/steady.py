@@ -164,7 +164,8 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
         wall_time_s=wall, instants=_instants(events, period, labels),
         first_turn=first_turn or _first_turn(events, labels, lead),
         switches=[{"t_s": float(e.t), "phi_deg": float(np.degrees(e.phi)), "kind": e.kind,
-                   "freewheel": labels[e.wheel], "eps": e.eps} for e in events],
+                   "freewheel": labels[e.wheel] if e.wheel >= 0 else None, "eps": e.eps}
+                  for e in events],
         labels=labels,
         trace={"t": t, "phi": ys[0], "omega_in": ys[1], "psi": ys[2] - start[2],
                "omega_out": ys[3], "eps": eps, "engaged": engaged,
@@ -180,8 +181,9 @@ def _initial_state(model: DriveModel) -> tuple[np.ndarray, Mode]:
     engaged = np.zeros(model.size, bool)
     engaged[lead] = True
     offset = np.where(engaged, u, 0.0)
-    return np.array([0.0, w, 0.0, max(float(du[lead]), 0.0) * w, 0.0, 0.0]), \
-        Mode(engaged, offset)
+    speed = max(float(du[lead]), 0.0) * w
+    stuck = speed == 0.0 and model.load.mean > 0
+    return np.array([0.0, w, 0.0, speed, 0.0, 0.0]), Mode(engaged, offset, stuck)
 
 
 def _rebase(model: DriveModel, y: np.ndarray, mode: Mode) -> tuple[np.ndarray, Mode]:
@@ -195,13 +197,13 @@ def _rebase(model: DriveModel, y: np.ndarray, mode: Mode) -> tuple[np.ndarray, M
     model.psi_origin += shift
     y[2] = 0.0
     y[4] = y[5] = 0.0
-    return y, Mode(mode.engaged.copy(), offset)
+    return y, Mode(mode.engaged.copy(), offset, mode.stuck)
 
 
 def _signature(model, y, mode, period):
     _, _, _, eps, _, _ = model.forces(y, mode)
     torque = np.where(mode.engaged, model.stiffness * eps, 0.0)
-    return y[1], y[3], torque, mode.engaged.copy(), period
+    return y[1], y[3], torque, np.append(mode.engaged, mode.stuck), period
 
 
 def _change(a, b, model, events) -> float:

@@ -138,6 +138,8 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
 
     t = np.asarray(trace.t)
     ys = np.asarray(trace.y).T
+    # an output at rest stopped at ψ̇ = -η·ω1 (the event's offset): show it at 0
+    ys[3] = np.where((ys[3] < 0) & (ys[3] > -1e-9 * model.input_speed), 0.0, ys[3])
     eps = np.asarray(trace.eps).T
     engaged = np.asarray(trace.engaged).T
     omega_in_mean = TWO_PI / period

@@ -102,8 +102,8 @@ def format_result(r) -> str:
         f"  eps_max          {r.eps_max:.5g} rad",
         f"  power            {r.power_in_w:.4f} W in, {r.power_out_w:.4f} W out "
         f"(balance {r.power_balance:.2e})",
-        f"  steady cycle     freewheel {inst.get('freewheel', '-')} closes, t1 {ms(inst.get('t1_s'))}"
-        f" (ε max), t2 {ms(inst.get('t2_s'))} (release), t3 {ms(inst.get('t3_s'))} (next closes)",
+        f"  steady cycle     freewheel {inst.get('freewheel', '-')} closes, "
+        f"t1 {ms(inst.get('t1_s'))} (ε max), t2 {ms(inst.get('t2_s'))} (release), t3 {ms(inst.get('t3_s'))} (next closes)",
         f"  first turn       t1 {ms(first.get('t1_s'))}, t2 {ms(first.get('t2_s'))}, "
         f"t3 {ms(first.get('t3_s'))}, ε max {first.get('eps_max') or 0:.5g} rad",
     ]

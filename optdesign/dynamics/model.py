@@ -8,8 +8,9 @@ function of the crank, u_k(φ), and a relative angle (the paper's ε)
 
 which it turns into the torque λ_k·ε_k only while engaged (the paper's asymmetric unit function
 λ(ε) = λ·[ε > 0]). An optional viscous term c_k·ε̇_k (``damping_ratio``; the paper has none)
-lets the ringing of stiff freewheels decay. Lagrange's equations with kinetic energy ½I1·φ̇² + ½I2·ψ̇² and spring energy
-½λ_k·ε_k² give eq. (3) of the paper written in (φ, ψ) instead of (φ, ε):
+lets the ringing of stiff freewheels decay. Lagrange's equations with kinetic energy
+½I1·φ̇² + ½I2·ψ̇² and spring energy ½λ_k·ε_k² give eq. (3) of the paper written in (φ, ψ)
+instead of (φ, ε):
 
     I1·φ̈ = a - b·φ̇ - Σ_k λ_k·ε_k·u_k'(φ)      (the reaction reaches the crank through u_k')
     I2·ψ̈ = Σ_k λ_k·ε_k - T_c(ψ)

@@ -28,8 +28,8 @@ from dataclasses import dataclass
 METHODS = ("Radau", "BDF", "LSODA", "RK45")
 FREEWHEEL_MODELS = ("ratchet", "composite")
 CRANK_MODELS = ("dynamic", "constant")
-KEYS = {"I1", "I2", "stiffness", "damping_ratio", "motor", "load", "cycles", "reduction", "freewheel", "crank",
-        "method", "rtol", "atol", "steady_tol"}
+KEYS = {"I1", "I2", "stiffness", "damping_ratio", "motor", "load", "cycles", "reduction",
+        "freewheel", "crank", "method", "rtol", "atol", "steady_tol"}
 REQUIRED = ("I1", "I2", "stiffness", "motor", "load")
 
 

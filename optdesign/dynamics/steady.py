@@ -5,7 +5,8 @@ crank turns (φ = 2π·m) repeats, i.e. over one turn
 
 - the crank speed φ̇ and the output speed ψ̇ change by at most ``steady_tol``·ω1,
 - every freewheel torque λ_k·ε_k changes by at most ``steady_tol``·T_ref (T_ref the largest of
-  the mean load and the peak freewheel torque of the turn), with the same freewheels engaged,
+  the mean load and the peak freewheel torque of the turn), with the same freewheels engaged
+  and the output in the same state (moving, or held at rest by its load),
 - and the turn time changes by at most ``steady_tol`` of itself.
 
 The turn after the first repeat is recorded densely and measured. Angles are re-based at every

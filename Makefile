@@ -18,6 +18,7 @@ $(STAMP): pyproject.toml constraints.txt | $(PY)
 
 run: $(STAMP)
 	$(VENV)/bin/optdesign analyze problems/sharkov2022.yaml
+	$(VENV)/bin/optdesign solve problems/sharkov2022_disc.yaml --out results/sharkov2022_disc
 
 test: $(STAMP)
 	$(PY) -m pytest -q

@@ -60,7 +60,7 @@ class Design:
     def sample(self, phi: np.ndarray, eccentricity: float = 1.0) -> dict[str, np.ndarray]:
         """theta, dtheta, ddtheta (chains × samples) and cos_mu at the crank angles ``phi``."""
         phi = np.atleast_1d(np.asarray(phi, dtype=float))
-        fmap = self.function().map(phi.size)
+        fmap = self.model.mapped(self.count, self.option_key, phi.size)
         out = fmap(phi[None, :], self.p(eccentricity))
         return {k: np.array(v) for k, v in zip(("theta", "dtheta", "ddtheta", "cos_mu"), out)}
 

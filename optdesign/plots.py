@@ -29,7 +29,7 @@ def plot_speeds(design, stroke: str, input_speed: float, eccentricity: float = 1
     for s in STROKE_SIGNS[stroke]:
         for k in range(dtheta.shape[0]):
             ax.plot(deg, s * dtheta[k] * input_speed, lw=0.9, alpha=0.6,
-                    label=f"rocker {k + 1}" if s == STROKE_SIGNS[stroke][0] else None)
+                    label=f"member {k + 1}" if s == STROKE_SIGNS[stroke][0] else None)
     env = output_envelope(dtheta, stroke) * input_speed
     ax.plot(deg, env, color="black", lw=2.4, label="output (envelope)")
     lo, hi = env.min(), env.max()
@@ -39,7 +39,8 @@ def plot_speeds(design, stroke: str, input_speed: float, eccentricity: float = 1
     ax.set_xlim(0, 360)
     ax.set_xticks(range(0, 361, 45))
     ax.set_xlabel("crank angle φ1 [deg]")
-    ax.set_ylabel(f"speed in the {stroke} direction [rad/s]")
+    ax.set_ylabel("driving speed [rad/s]" if stroke == "both" else
+                  f"speed in the {stroke} direction [rad/s]")
     ax.set_title(title or f"{stroke} stroke, eccentricity {eccentricity:g}")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, ncol=5, loc="upper center", bbox_to_anchor=(0.5, -0.14),

@@ -25,6 +25,7 @@ TOP_KEYS = {"name", "mechanism", "input_speed", "stroke", "design", "options", "
             "objective", "regulation", "solver"}
 RIPPLE_DEFINITIONS = ("midrange", "mean")
 OBJECTIVES = ("ripple", "-ratio")
+HESSIANS = ("exact", "limited-memory")
 
 
 @dataclass(frozen=True)
@@ -88,6 +89,8 @@ class SolverSettings:
     smoothing: float = 200.0            # log-sum-exp ρ, per unit of ω/ω1
     seed: int = 0
     max_iter: int = 100                 # IPOPT iterations per start
+    hessian: str = "limited-memory"     # or exact (CasADi's second derivatives): README
+    peak_samples: bool = False          # also bound ω_max at every sample (a safety net)
 
 
 @dataclass(frozen=True)
@@ -359,7 +362,7 @@ def _read_regulation(r, raw) -> tuple[float, ...]:
 def _read_solver(r, raw) -> SolverSettings:
     raw = r.mapping(raw, "solver")
     r.known_keys(raw, "solver", {"samples", "starts", "agree", "smoothing", "seed",
-                                      "max_iter"})
+                                      "max_iter", "hessian", "peak_samples"})
     kw = {}
     for key, low in (("samples", 16), ("starts", 1), ("agree", 1), ("seed", 0),
                      ("max_iter", 1)):
@@ -367,6 +370,15 @@ def _read_solver(r, raw) -> SolverSettings:
             kw[key] = r.integer(raw[key], f"solver.{key}", low)
     if "smoothing" in raw:
         kw["smoothing"] = r.number(raw["smoothing"], "solver.smoothing", positive=True)
+    if "peak_samples" in raw:
+        if not isinstance(raw["peak_samples"], bool):
+            raise r.error("solver.peak_samples", "must be true or false")
+        kw["peak_samples"] = raw["peak_samples"]
+    if "hessian" in raw:
+        kw["hessian"] = r.text(raw["hessian"], "solver.hessian")
+        if kw["hessian"] not in HESSIANS:
+            raise r.error("solver.hessian", f"must be one of {', '.join(HESSIANS)} "
+                                            f"(got {kw['hessian']!r})")
     return SolverSettings(**kw)
 
 

@@ -121,3 +121,14 @@ def test_collapsed_bounds_fix_the_variable(write_problem):
 def test_phase_choices_and_ranges(write_problem):
     assert load_problem(write_problem(design(phases={"choices": [8, 4, 4]}))).counts() == [4, 8]
     assert load_problem(write_problem(design(phases={"lower": 3, "upper": 5}))).counts() == [3, 4, 5]
+
+
+@pytest.mark.parametrize("solver,message", [
+    ({"hessian": "bfgs"}, r"solver\.hessian must be one of exact, limited-memory"),
+    ({"peak_samples": "yes"}, r"solver\.peak_samples must be true or false"),
+    ({"starts": 0}, r"solver\.starts must be at least 1"),
+    ({"smoothing": -1}, r"solver\.smoothing must be positive"),
+])
+def test_bad_solver_settings(write_problem, solver, message):
+    with pytest.raises(ProblemError, match=message):
+        load_problem(write_problem(base_problem(solver=solver)))

@@ -107,6 +107,11 @@ class Mechanism(ABC):
                            [theta, dtheta, ddtheta, cos_mu],
                            ["phi", "p"], ["theta", "dtheta", "ddtheta", "cos_mu"])
 
+    @lru_cache(maxsize=256)
+    def mapped(self, count: int, options: tuple[tuple[str, str], ...], n_points: int):
+        """:meth:`kinematics` mapped over ``n_points`` crank angles (built once, then reused)."""
+        return self.kinematics(count, options).map(n_points)
+
     @lru_cache(maxsize=64)
     def joints(self, count: int, options: tuple[tuple[str, str], ...] = ()):
         """``casadi.Function`` (phi, p) -> 2×J joint positions, and the names and links."""

@@ -78,6 +78,16 @@ class FourBarConverter(Mechanism):
         """Pins must fit on the disc: l2 - l2' >= min_pin_radius (g >= 0)."""
         return [("pin_radius", p["l2"] - p["l2_prime"] - constraints.min_pin_radius)]
 
+    def grashof_constraints(self, p):
+        """Chain 1 (O A B1 O1) a Grashof crank-rocker with l1 the crank: s + l <= p + q.
+
+        Written as l1 + X <= (sum of the other two) for each X of l0, l2, l3, so that no max()
+        is needed; summing two of them also gives l1 <= l0, l2, l3 (the crank is shortest).
+        """
+        links = {"l0": p["l0"], "l2": p["l2"], "l3": p["l3"]}
+        total = links["l0"] + links["l2"] + links["l3"]
+        return [(f"grashof[{k}]", total - 2 * v - p["l1"]) for k, v in links.items()]
+
     def check_values(self, values, count):
         if values["l1"] >= values["l0"]:
             raise ProblemError(f"design.l1 must be shorter than l0 (got l1 = {values['l1']:g}, "

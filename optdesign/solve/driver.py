@@ -16,6 +16,8 @@ from .verify import Verification, eccentricities_of, verify
 SUCCESS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 MAX_REFINEMENTS = 4
 ANGLE_SAFETY_DEG = 0.01
+#: two optima "agree" within this relative difference (the multistart stopping rule)
+AGREE_REL = 1e-4
 
 
 class PhaseSolver:
@@ -71,6 +73,7 @@ class PhaseSolver:
         start = dict(values)
         t0 = time.perf_counter()
         iterations, extra_angle, status, surrogate = 0, ANGLE_SAFETY_DEG, "not run", None
+        multiplier = None
         note = ""
         for _ in range(MAX_REFINEMENTS):
             if not ver.sequences:
@@ -86,6 +89,10 @@ class PhaseSolver:
             status = stats["return_status"]
             iterations += int(stats["iter_count"])
             x = np.array(sol["x"]).ravel()
+            # d f*/d lbg = -lam_g (CasADi's sign convention for a lower bound)
+            multiplier = -float(np.array(sol["lam_g"]).ravel()[
+                nlp.layout.find(nlp.layout.g, "min_ratio")][0])
+            at_window = nlp.at_window_bound(x, lbx, ubx)
             trial = values | nlp.lengths_of(x)
             new = verify(problem, trial)
             ripples = np.array(nlp.surrogate(x, params)[0]).ravel()
@@ -99,13 +106,13 @@ class PhaseSolver:
             if "transmission_angle" in ver.violations:
                 extra_angle += ver.violations["transmission_angle"] + ANGLE_SAFETY_DEG
                 continue
-            if ver.sequences != nlp.sequences:
-                continue                       # the envelope's hand-overs changed: rebuild
+            if ver.sequences != nlp.sequences or at_window:
+                continue        # hand-overs changed order, or an angle ran to its window
             break
         record = StartRecord(start=start, ipopt_status=status, iterations=iterations,
                              time_s=time.perf_counter() - t0,
                              feasible=bool(ver.feasible and status in SUCCESS),
-                             delta=ver.delta, note=note)
+                             delta=ver.delta, note=note, ratio_multiplier=multiplier)
         return record, ver, values, surrogate
 
 
@@ -136,6 +143,12 @@ def solve_phase(problem, count: int, progress=None) -> PhaseResult:
         if progress:
             progress()
         if not record.feasible:
+            # Stopping rule for infeasible problems: the last `agree + 1` starts all ended
+            # infeasible on the same constraint.
+            last = [s.note for s in result.starts[-(problem.solver.agree + 1):]]
+            if best_key == math.inf and len(last) == problem.solver.agree + 1 and \
+                    last[0] and len(set(last)) == 1:
+                break
             continue
         key = ver.delta if problem.objective.minimize == "ripple" else -ver.ratio
         keys.append(key)
@@ -143,7 +156,7 @@ def solve_phase(problem, count: int, progress=None) -> PhaseResult:
             best_key = key
             result = _fill(result, problem, values, ver, surrogate)
         # Multistart stopping rule: the best optimum has been reached from `agree` starts.
-        if sum(abs(k - best_key) <= 1e-7 * max(1.0, abs(best_key)) for k in keys) >= \
+        if sum(abs(k - best_key) <= AGREE_REL * max(1e-3, abs(best_key)) for k in keys) >= \
                 problem.solver.agree:
             break
     if result.status != "optimal":

@@ -5,9 +5,10 @@ Sign convention, stated once: every inequality is g(x) >= 0.
 Speeds are per unit crank speed, f_c(φ) = s·dθ_k/dφ for each curve c = (stroke sign s,
 rocker k) (shared/DESIGN.md 1.1). For each eccentricity e the NLP carries
 
-* ``w_hi`` (ω_max/ω1): epigraph ``w_hi - f_c(φ_j) >= 0`` at the N samples, plus one
-  stationary point φ_m,c per curve with ``f_c'(φ_m,c) = 0`` and ``w_hi - f_c(φ_m,c) >= 0``,
-  so the peak is exact, not O(h²);
+* ``w_hi`` (ω_max/ω1): one stationary point φ_m,c per curve with ``f_c'(φ_m,c) = 0`` and
+  ``w_hi - f_c(φ_m,c) >= 0``, so the peak is exact, not O(h²) (``solver: {peak_samples:
+  true}`` adds the epigraph ``w_hi - f_c(φ_j) >= 0`` at every sample as a safety net; it
+  costs n·N constraints and gains nothing on our benchmarks);
 * ``w_lo`` (ω_min/ω1): for every hand-over of the envelope from curve a to curve b, a free
   angle φ_x with ``f_a(φ_x) - w_lo >= 0`` and ``f_b(φ_x) - w_lo >= 0``. Maximising w_lo puts
   φ_x where min(f_a, f_b) peaks, i.e. at the crossing, whose value is the envelope's local
@@ -38,6 +39,8 @@ IPOPT_OPTIONS = {
     "ipopt.mu_strategy": "adaptive",
     "ipopt.nlp_scaling_method": "gradient-based",
     "ipopt.sb": "yes",
+    "ipopt.bound_relax_factor": 0.0,          # bounds are the designer's: keep them exactly
+    "ipopt.constr_viol_tol": 1e-8,
     "print_time": False,
 }
 
@@ -156,7 +159,8 @@ class PhaseNLP:
             w_hi, w_lo = w[0], w[1]
             constrain(f"transmission_angle[{tag}]",
                       cos_limit**2 - ca.vec(cos_mu) ** 2)
-            constrain(f"peak_samples[{tag}]", ca.vec(w_hi - f))
+            if P.solver.peak_samples:
+                constrain(f"peak_samples[{tag}]", ca.vec(w_hi - f))
             lse = ca.vertcat(*[smooth_max(f[:, j], rho) for j in range(N)])
             constrain(f"trough_samples[{tag}]", lse - w_lo)
             # Exact peaks: one stationary point per curve.
@@ -210,7 +214,8 @@ class PhaseNLP:
         self.surrogate = ca.Function("surrogate", [x, ps],
                                      [ca.vertcat(*ripples), ca.vertcat(*means),
                                       ca.vertcat(*peaks)])
-        opts = dict(IPOPT_OPTIONS) | {"ipopt.max_iter": P.solver.max_iter, "expand": True}
+        opts = dict(IPOPT_OPTIONS) | {"ipopt.max_iter": P.solver.max_iter, "expand": True,
+                                      "ipopt.hessian_approximation": P.solver.hessian}
         self.solver = ca.nlpsol(f"nlp_n{self.count}", "ipopt",
                                 {"x": x, "p": ps, "f": objective, "g": g}, opts)
         self.n_x = x.numel()
@@ -247,6 +252,24 @@ class PhaseNLP:
                 lbx[sl] = 0.0
         return lbx, ubx
 
+    def at_window_bound(self, x, lbx, ubx, tol: float = 1e-6) -> bool:
+        """True when a tracked angle (peak or hand-over) ended on the edge of its window:
+        the point moved further than the window allows, so the driver re-centres and
+        re-solves."""
+        for block in self.layout.x:
+            if block.name.startswith(("phi_peak", "phi_handover")):
+                sl = slice(block.start, block.start + block.size)
+                if np.any(x[sl] - lbx[sl] < tol) or np.any(ubx[sl] - x[sl] < tol):
+                    return True
+        return False
+
+    def lengths_of(self, x: np.ndarray) -> dict[str, float]:
+        """The free lengths in mm, clipped to their bounds (IPOPT may relax a bound by ~1e-8)."""
+        sl = self.layout.find(self.layout.x, "lengths")
+        P = self.problem
+        return {k: float(np.clip(v * s, P.design[k].lower, P.design[k].upper))
+                for k, v, s in zip(self.free, x[sl], self.scale)}
+
     def pack(self, guess: dict) -> np.ndarray:
         x0 = np.zeros(self.n_x)
         for block in self.layout.x:
@@ -256,6 +279,3 @@ class PhaseNLP:
     def unpack(self, x: np.ndarray) -> dict:
         return {b.name: np.array(x[b.start:b.start + b.size]) for b in self.layout.x}
 
-    def lengths_of(self, x: np.ndarray) -> dict[str, float]:
-        sl = self.layout.find(self.layout.x, "lengths")
-        return {k: float(v * s) for k, v, s in zip(self.free, x[sl], self.scale)}

@@ -15,6 +15,10 @@ class StartRecord:
     feasible: bool
     delta: float | None          # exact δ of the returned point (None if it does not assemble)
     note: str = ""
+    #: sensitivity of the optimal objective to the ratio bound, d(objective)/d(min_ratio), from
+    #: IPOPT's multiplier of that constraint (the Pareto front's local slope dδ/d ratio);
+    #: 0 when the bound is slack.
+    ratio_multiplier: float | None = None
 
 
 @dataclass

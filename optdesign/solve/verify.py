@@ -19,7 +19,7 @@ from ..exact import exact_figures
 #: Tolerances of the exact check: a constraint violated by less is taken as met.
 TOL_ANGLE_DEG = 1e-3
 TOL_RATIO = 1e-7
-TOL_LENGTH = 1e-6
+TOL_LENGTH = 1e-5                     # mm: 10 nm, far below any manufacturing tolerance
 
 
 @dataclass

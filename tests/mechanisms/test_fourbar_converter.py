@@ -134,3 +134,14 @@ def test_more_phases_less_ripple():
     deltas = [exact_figures(Design("fourbar_converter", dict(PAPER) | {"phases": n}),
                             "forward", W1)[0].delta for n in (3, 6, 12)]
     assert deltas[0] > deltas[1] > deltas[2]
+
+
+@pytest.mark.parametrize("lengths,ok", [
+    (dict(l0=225, l1=20, l2=225, l2_prime=100, l3=56), True),      # the paper: a crank-rocker
+    (dict(l0=100, l1=20, l2=40, l2_prime=10, l3=50), False),       # 20 + 100 > 40 + 50
+    (dict(l0=100, l1=30, l2=80, l2_prime=10, l3=50), True),        # the limit: 30 + 100 = 80 + 50
+])
+def test_grashof_constraints(lengths, ok):
+    from optdesign.mechanisms import get_mechanism
+    g = [float(v) for _, v in get_mechanism("fourbar_converter").grashof_constraints(lengths)]
+    assert (min(g) >= 0) is ok

@@ -89,7 +89,8 @@ def format_result(r) -> str:
 
     lines = [
         f"{r.name}: {r.mechanism}, {r.freewheel} freewheels, {r.crank} crank, {r.method} "
-        f"(rtol {r.rtol:g}, atol {r.atol:g} rad)",
+        f"(rtol {r.rtol:g}, atol {r.atol:g} rad)"
+        + (" - explicit, for comparison only" if r.method == "RK45" else ""),
         f"  {'steady' if r.steady else 'NOT steady'} after {r.cycles} turns "
         f"(residual {r.steady_residual:.2g}); {r.steps} steps, {r.events} switches, "
         f"{r.wall_time_s:.2f} s",

@@ -1,0 +1,7 @@
+"""Drive dynamics with compliant freewheels (Ambartsumyants & Subbotina 2015, DESIGN.md 1.3).
+
+``section`` reads the ``dynamics:`` key of a problem file, ``model`` holds the equations of
+motion, ``integrator`` the event-driven stiff integration, ``steady`` the turn-by-turn search
+for the steady cycle and its figures, ``plots`` the paper-style figures. Only
+``optdesign simulate`` imports any of it.
+"""

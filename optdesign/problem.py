@@ -137,6 +137,23 @@ class Problem:
 
 
 # --------------------------------------------------------------------------- loading
+def _yaml_loader():
+    """PyYAML's safe loader, but reading ``1e7`` and ``2.5E-3`` as numbers as YAML 1.2 does
+    (YAML 1.1 wants ``1.0e+7``; a designer writing stiffness 1e7 means a number)."""
+    import re
+
+    import yaml
+
+    class Loader(yaml.SafeLoader):
+        pass
+
+    Loader.add_implicit_resolver(
+        "tag:yaml.org,2002:float",
+        re.compile(r"""^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"""),
+        list("-+0123456789"))
+    return Loader
+
+
 def load_problem(path: str | Path) -> Problem:
     """Read and validate a YAML problem file."""
     import yaml
@@ -150,7 +167,7 @@ def load_problem(path: str | Path) -> Problem:
     except (OSError, UnicodeDecodeError) as exc:
         raise ProblemError(f"{path}: cannot be read ({exc.__class__.__name__})") from None
     try:
-        data = yaml.safe_load(text)
+        data = yaml.load(text, Loader=_yaml_loader())
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         line = f" at line {mark.line + 1}" if mark is not None else ""

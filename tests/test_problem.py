@@ -132,3 +132,12 @@ def test_phase_choices_and_ranges(write_problem):
 def test_bad_solver_settings(write_problem, solver, message):
     with pytest.raises(ProblemError, match=message):
         load_problem(write_problem(base_problem(solver=solver)))
+
+
+def test_exponent_numbers_without_a_dot_are_numbers(write_problem):
+    """PyYAML (YAML 1.1) would read 1e2 as text; a designer means a number."""
+    text = (ROOT / "problems" / "sharkov2022.yaml").read_text().replace("input_speed: 97.0",
+                                                                        "input_speed: 9.7e1")
+    text = text.replace("l0: 225", "l0: 2.25E2").replace("l3: 56", "l3: 56e0")
+    p = load_problem(write_problem(text))
+    assert p.input_speed == 97.0 and p.design["l0"].value == 225.0 and p.design["l3"].value == 56

@@ -136,6 +136,14 @@ class Problem:
         return replace(self, design=design)
 
 
+    def require_section(self, key: str):
+        """The parsed ``key:`` section, or a ProblemError naming the file when it is missing."""
+        if key not in self.sections:
+            raise ProblemError(f"{self.source}: {key} is required by this command "
+                               f"(add a {key}: section)")
+        return self.sections[key]
+
+
 # --------------------------------------------------------------------------- loading
 def _yaml_loader():
     """PyYAML's safe loader, but reading ``1e7`` and ``2.5E-3`` as numbers as YAML 1.2 does

@@ -1,8 +1,6 @@
 """``optdesign driveline PROBLEM.yaml [--out DIR]``: the shaft's figure, DIR/driveline.png."""
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 
@@ -16,14 +14,10 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from ..analysis import analyze
-    from ..errors import ProblemError
     from ..problem import load_problem
 
     problem = load_problem(args.problem)
-    section = problem.sections.get("driveline")
-    if section is None:
-        raise ProblemError(f"{problem.source}: driveline is required by this command "
-                           f"(add a driveline: section)")
+    section = problem.require_section("driveline")
     result = analyze(problem)
     figures = result.sections["driveline"]
     out = Path(args.out) if args.out else Path("results") / problem.name
@@ -36,18 +30,12 @@ def run(args) -> int:
 
 
 def write_figure(section, path: Path, **marks) -> None:
-    """Plot and save atomically: a temporary file in the same directory, then os.replace."""
+    """Plot the shaft's figure and save it atomically."""
+    import matplotlib.pyplot as plt
+
     from ..driveline.plot import plot_driveline
+    from ..io import atomic_savefig
 
     fig = plot_driveline(section, **marks)
-    fd, tmp = tempfile.mkstemp(prefix=".driveline-", suffix=".png", dir=path.parent)
-    os.close(fd)
-    try:
-        fig.savefig(tmp, format="png", dpi=120)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)      # mkstemp makes 0600; give the file usual rights
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_savefig(fig, path, dpi=120, bbox_inches=None)
+    plt.close(fig)

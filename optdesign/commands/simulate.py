@@ -34,10 +34,7 @@ def run(args) -> int:
     from ..problem import load_problem
 
     problem = load_problem(args.problem)
-    section = problem.sections.get("dynamics")
-    if section is None:
-        raise ProblemError(f"{problem.source}: dynamics is required by this command "
-                           f"(add a dynamics: section)")
+    section = problem.require_section("dynamics")
     overrides = {k: getattr(args, k) for k in ("freewheel", "crank", "cycles")
                  if getattr(args, k) is not None}
     if overrides.get("cycles", 1) < 1:

@@ -27,7 +27,10 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from . import __version__
+
     parser = _Parser(prog="optdesign", description="Size the linkages of pulse CVTs.")
+    parser.add_argument("--version", action="version", version=f"optdesign {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     for name in COMMANDS:
         import_module(name).add_parser(sub)

@@ -7,6 +7,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..accuracy import solve_accuracy
 from ..design import Design
 from .nlp import PhaseNLP
 from .result import PhaseResult, SolveResult, StartRecord
@@ -215,10 +216,6 @@ def solve(problem, progress=None) -> SolveResult:
                    "min_ratio": problem.objective.min_ratio,
                    "max_ripple": problem.objective.max_ripple,
                    "eccentricities": list(problem.eccentricities)},
-        accuracy={"verification": "exact evaluator (crossings and stationary points by "
-                                  "Brent's method; mean from exact angle increments)",
-                  "nlp_samples": problem.solver.samples,
-                  "nlp_smoothing": problem.solver.smoothing,
-                  "verification_tolerance_angle_deg": 1e-3},
+        accuracy=solve_accuracy(problem, best),
         message=message, stroke=problem.stroke, mechanism=problem.mechanism,
         input_speed=problem.input_speed)

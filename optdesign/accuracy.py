@@ -27,7 +27,7 @@ import numpy as np
 
 from .design import Design
 from .envelope import StrokeFigures, output_envelope, sampled_figures
-from .exact import exact_figures
+from .exact import DEFAULT_GRID, exact_figures
 
 REFERENCE_GRID = 16384
 SAMPLED_N = (16, 32, 64, 90, 128, 256, 512, 1024, 4096, 16384, 65536)
@@ -214,11 +214,13 @@ def accuracy_rows(problem, values=None, e: float = 1.0, crosscheck_samples: int 
     args = (design, problem.stroke, problem.input_speed)
     ref = reference_figures(*args, e, crosscheck_samples)
     sampled = SAMPLED_N[:-2] if quick else SAMPLED_N
-    rows = sampled_rows(*args, ref, sampled, e) + exact_rows(*args, ref, EXACT_GRID, e)
+    grids = (8, 64, DEFAULT_GRID) if quick else EXACT_GRID
+    rows = sampled_rows(*args, ref, sampled, e) + exact_rows(*args, ref, grids, e)
     if e == 1.0:
-        nsur = (45, 90, 180) if quick else SURROGATE_N
+        nsur = (45, 90) if quick else SURROGATE_N
         rows += lse_rows(*args, ref, nsur)
-        rows += surrogate_rows(problem, dict(design.values), ref, nsur)
+        rows += surrogate_rows(problem, dict(design.values), ref, nsur,
+                               (200.0,) if quick else SMOOTHING)
     if solve_problem is not None:
         rows += solve_rows(solve_problem, SOLVE_SETTINGS[1:4] if quick else SOLVE_SETTINGS)
     return rows, ref
@@ -313,7 +315,6 @@ def solve_accuracy(problem, best) -> dict:
       minus the exact least angle (what sampling the constraint misses; the driver tightens the
       NLP's bound by it and re-solves when the exact check fails).
     """
-    from .exact import DEFAULT_GRID
     from .solve.verify import TOL_ANGLE_DEG, TOL_LENGTH, TOL_RATIO
 
     s = problem.solver

@@ -9,9 +9,9 @@ import numpy as np
 from .errors import AssemblyError
 from .mechanisms import get_mechanism
 
-#: |cos μ| may exceed 1 by this much (rounding at a toggle, where the chain folds flat) and
-#: still count as assembled
-ASSEMBLY_TOL = 1e-12
+#: |cos μ| may exceed 1 by this much and still count as assembled: none, since past 1 the
+#: floored square root of geometry.circle_intersection puts a spurious spike in the speed
+ASSEMBLY_TOL = 0.0
 
 
 @dataclass(frozen=True)

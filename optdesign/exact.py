@@ -20,8 +20,9 @@ from .mechanisms import STROKE_SIGNS
 TWO_PI = 2 * np.pi
 DEFAULT_GRID = 1024
 #: a local peak of |cos μ| this close to 1 is a toggle (rod and rocker folded, μ = 0 or 180°):
-#: the rocker speed jumps there, so its one-sided limits are candidate extremes
-TOGGLE_TOL = 1e-9
+#: the rocker speed jumps there, so its one-sided limits are candidate extremes. Farther from
+#: 1 the speed changes steeply but smoothly, and the stationary points catch its extremes.
+TOGGLE_TOL = 1e-13
 #: offset of the two points each side of a toggle from which its one-sided limit is
 #: extrapolated (well outside geometry.SQRT_FLOOR's ~1e-6 rad, error O(step²))
 TOGGLE_STEP = 1e-4

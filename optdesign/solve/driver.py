@@ -129,6 +129,10 @@ def _binding(nlp: PhaseNLP, g: np.ndarray) -> str:
 
 def solve_phase(problem, count: int, progress=None) -> PhaseResult:
     """Best verified optimum of one phase count over the multi-start."""
+    if not problem.free_lengths():
+        fixed = _fixed_infeasible(problem, count)
+        if fixed is not None:
+            return fixed
     solver = PhaseSolver(problem, count)
     starts = start_designs(problem, count, problem.solver.starts)
     if not starts:
@@ -171,6 +175,19 @@ def solve_phase(problem, count: int, progress=None) -> PhaseResult:
                           f"{', '.join(sorted(statuses))})"
                           + (f"; binding: {result.binding}" if result.binding else ""))
     return result
+
+
+def _fixed_infeasible(problem, count: int) -> PhaseResult | None:
+    """Every length fixed and the exact check fails: nothing for IPOPT to move, so say which
+    constraint the design violates (instead of IPOPT failing on the NLP's inner variables)."""
+    values = problem.start_values() | {problem.model.count_variable: count}
+    ver = verify(problem, values)
+    if ver.feasible:
+        return None
+    names = ", ".join(ver.violations)
+    return PhaseResult(count, "infeasible", binding=next(iter(ver.violations), None),
+                       message=f"the fixed design violates {names}"
+                               + (f" ({ver.message})" if ver.message else ""))
 
 
 def _fill(result: PhaseResult, problem, values, ver: Verification, surrogate) -> PhaseResult:

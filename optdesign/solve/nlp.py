@@ -103,7 +103,9 @@ class PhaseNLP:
         self.model = model
         self.free = problem.free_lengths()
         self.fixed = [k for k in model.lengths if k not in self.free]
-        self.scale = np.array([problem.design[k].upper for k in self.free])
+        # geometric mean of the bounds: O(1) scaled variables even when a range spans decades
+        self.scale = np.array([math.sqrt(problem.design[k].lower * problem.design[k].upper)
+                               for k in self.free])
         self.signs = STROKE_SIGNS[problem.stroke]
         self.n_curves = count * len(self.signs)
         self.eccs = self._eccentricities()
@@ -237,7 +239,7 @@ class PhaseNLP:
         lbx, ubx = np.full(self.n_x, -np.inf), np.full(self.n_x, np.inf)
         sl = L.find(L.x, "lengths")
         lbx[sl] = [P.design[k].lower / s for k, s in zip(self.free, self.scale)]
-        ubx[sl] = 1.0
+        ubx[sl] = [P.design[k].upper / s for k, s in zip(self.free, self.scale)]
         half_window = math.pi / self.n_curves
         for block in L.x:
             if block.name.startswith(("phi_peak", "phi_handover")):

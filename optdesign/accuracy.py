@@ -151,7 +151,8 @@ def surrogate_figures(problem, values, samples: int, smoothing: float):
     solver = PhaseSolver(fixed, count)
     ver = verify(fixed, values)
     if not ver.sequences:
-        raise ValueError(f"the design cannot be evaluated: {ver.message}")
+        from .errors import SolveError
+        raise SolveError(f"the NLP cannot evaluate this design: {ver.message}")
     nlp = solver.nlp(ver.sequences, 0.0)
     guess = solver.guess(nlp, ver, values)
     lbx, ubx = nlp.bounds(guess)
@@ -202,7 +203,9 @@ def solve_rows(problem, settings=SOLVE_SETTINGS, reference=SOLVE_REFERENCE):
                      "delta": r.delta, "ratio": r.ratio, "surrogate_gap": gap,
                      "delta_error": abs(r.delta - ref.delta) if ok and ref.delta else None,
                      "ratio_error": abs(r.ratio - ref.ratio) if ok and ref.ratio else None,
-                     "reference_delta": ref.delta, "iterations": r.iterations})
+                     "reference_delta": ref.delta, "iterations": r.iterations,
+                     "angle_sample_gap_deg": r.accuracy["transmission_angle_sample_gap_deg"],
+                     "starts": sum(len(ph.starts) for ph in r.per_phase)})
     return rows
 
 
@@ -264,7 +267,8 @@ def plot_accuracy(rows: list[dict], ax=None, title: str | None = None):
     for r in rows:
         if r.get("delta_error") is None:
             continue
-        groups.setdefault((r["method"], r.get("smoothing")), []).append(r)
+        key = (r["method"], None if r["method"] == "solve" else r.get("smoothing"))
+        groups.setdefault(key, []).append(r)
     styles = {"sampled": ("o", "-"), "exact": ("s", "-"), "surrogate": ("^", "--"),
               "lse": ("v", ":"), "solve": ("D", "")}
     for (method, rho), rs in groups.items():
@@ -274,9 +278,11 @@ def plot_accuracy(rows: list[dict], ax=None, title: str | None = None):
         t = [r["time_s"] for r in rs]
         err = [max(r["delta_error"], floor) for r in rs]
         ax.plot(t, err, marker=marker, ls=ls or "none", label=label, ms=5)
-        if method in ("sampled", "exact", "surrogate"):
+        if method in ("sampled", "exact", "surrogate", "solve"):
             for r, x, y in zip(rs, t, err):
-                ax.annotate(str(r["samples"]), (x, y), fontsize=6.5, alpha=0.75,
+                text = str(r["samples"]) if method != "solve" else \
+                    f"N={r['samples']}, ρ={r['smoothing']:g}"
+                ax.annotate(text, (x, y), fontsize=6.5, alpha=0.75,
                             xytext=(3, 3), textcoords="offset points")
     ax.set_xscale("log")
     ax.set_yscale("log")
@@ -315,7 +321,7 @@ def solve_accuracy(problem, best) -> dict:
       minus the exact least angle (what sampling the constraint misses; the driver tightens the
       NLP's bound by it and re-solves when the exact check fails).
     """
-    from .solve.verify import TOL_ANGLE_DEG, TOL_LENGTH, TOL_RATIO
+    from .solve.verify import TOL_ANGLE_DEG, TOL_LENGTH, TOL_RATIO, eccentricities_of
 
     s = problem.solver
     out = {"verification": "exact evaluator (crossings and stationary points by Brent's "
@@ -334,12 +340,13 @@ def solve_accuracy(problem, best) -> dict:
     d_delta = d_ratio = 0.0
     phi = np.linspace(0.0, 2 * np.pi, s.samples, endpoint=False)
     sampled_angle = math.inf
-    for e in problem.eccentricities:
+    for e in eccentricities_of(problem):          # e = 1 (the ratio) and the listed ones
         coarse, _ = exact_figures(design, problem.stroke, problem.input_speed, e)
         fine, _ = exact_figures(design, problem.stroke, problem.input_speed, e,
                                 n_grid=4 * DEFAULT_GRID)
         definition = problem.objective.ripple
-        d_delta = max(d_delta, abs(coarse.ripple(definition) - fine.ripple(definition)))
+        if e in problem.eccentricities:
+            d_delta = max(d_delta, abs(coarse.ripple(definition) - fine.ripple(definition)))
         if e == 1.0:
             d_ratio = abs(coarse.ratio - fine.ratio)
         cos_mu = np.abs(design.sample(phi, e)["cos_mu"]).clip(max=1.0)

@@ -50,7 +50,7 @@ class PhaseSolver:
         for i, e in enumerate(nlp.eccs):
             tag = f"e{e:g}"
             fig = ver.figures[i]
-            guess[f"w_{tag}"] = [fig.omega_max / w1, fig.omega_min / w1]
+            guess[f"w_{tag}"] = [fig.omega_max / (w1 * e), fig.omega_min / (w1 * e)]
             dth = design.sample(nlp.phi, e)["dtheta"]
             f = np.vstack([s * dth for s in nlp.signs])
             guess[f"phi_peak_{tag}"] = nlp.phi[np.argmax(f, axis=1)]

@@ -32,8 +32,9 @@ def test_analyze_crank_longer_than_rocker_exit_1(write_problem, capsys):
     assert failure["chain"] == 1 and "does not assemble" in failure["message"]
 
 
-def test_analyze_crank_longer_than_frame_exit_2(write_problem, capsys):
-    code, _, err = run(capsys, "analyze", str(write_problem(base_problem(
+@pytest.mark.parametrize("command", ["analyze", "solve"])
+def test_crank_longer_than_frame_exit_2(write_problem, capsys, command):
+    code, _, err = run(capsys, command, str(write_problem(base_problem(
         design=PAPER | {"l1": 300.0}))))
     assert code == 2
     assert err.strip().count("\n") == 0
@@ -96,3 +97,12 @@ def test_mirrored_geometry_cli(write_problem, capsys):
         options={"branch": "right"}))), "--json")
     assert code == 0
     assert json.loads(out)["strokes"]["forward"]["delta"] == pytest.approx(0.376413, abs=1e-6)
+
+
+def test_solve_crank_longer_than_rocker_exit_1(write_problem, capsys, tmp_path):
+    """A fixed design that does not assemble: solve says so in one result, exit 1."""
+    code, out, _ = run(capsys, "solve", str(write_problem(base_problem(
+        design=PAPER | {"l1": 60.0}))), "--json", "--no-plots", "--out", str(tmp_path / "o"))
+    assert code == 1
+    res = json.loads(out)
+    assert res["status"] == "infeasible" and "does not assemble" in res["message"]

@@ -63,3 +63,33 @@ def test_infeasible_problem_fails_clearly():
     r = checked(data)
     assert r.status != "optimal"
     assert "min_ratio" in r.message or "binding" in r.message
+
+
+@pytest.mark.parametrize("factor", [1e-3, 1e3])
+def test_solve_in_metres_and_micrometres(factor):
+    """The disc problem with every length (and the pin radius) in metres or micrometres: the
+    same optimum, δ = 0.140214 to 1e-5, lengths scaled by the factor."""
+    data = disc()
+    for k, v in data["design"].items():
+        if k != "phases":
+            data["design"][k] = ({b: x * factor for b, x in v.items()} if isinstance(v, dict)
+                                 else v * factor)
+    data["constraints"]["min_pin_radius"] *= factor
+    r = checked(data)
+    assert r.status == "optimal"
+    assert r.delta == pytest.approx(0.140214, abs=1e-5)
+    assert r.design["l1"] == pytest.approx(20 * factor)
+
+
+def test_tiny_eccentricity_in_the_nlp():
+    """Regulation down to e = 1e-6: speeds ~1e-7 ω1. Before scaling each eccentricity's speeds
+    by e in the NLP, they sat below IPOPT's tolerances: 2 of 3 starts hit the iteration limit
+    and the NLP's δ was off by 1.8 (δ = 0.1787 returned, verified but far from optimal). Now
+    the surrogate is exact at the optimum and the worst δ is the small-e limit ~0.1436."""
+    data = disc()
+    data["regulation"] = {"eccentricity": [1.0, 1e-6]}
+    r = checked(data)
+    assert r.status == "optimal"
+    assert abs(r.best_phase().surrogate_gap) < 1e-8
+    assert abs(r.accuracy["surrogate_gap"]) < 1e-8
+    assert r.delta == pytest.approx(0.143594, abs=1e-5)

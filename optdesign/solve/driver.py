@@ -220,6 +220,7 @@ def solve(problem, progress=None) -> SolveResult:
     else:
         status = "infeasible" if all(p.status == "infeasible" for p in per_phase) else "failed"
         message = "; ".join(f"n={p.phases}: {p.message}" for p in per_phase)
+    accuracy = solve_accuracy(problem, best)        # inside solve_time_s: part of the solve
     return SolveResult(
         name=problem.name, status=status,
         design=best.design if best else None,
@@ -233,6 +234,6 @@ def solve(problem, progress=None) -> SolveResult:
                    "min_ratio": problem.objective.min_ratio,
                    "max_ripple": problem.objective.max_ripple,
                    "eccentricities": list(problem.eccentricities)},
-        accuracy=solve_accuracy(problem, best),
+        accuracy=accuracy,
         message=message, stroke=problem.stroke, mechanism=problem.mechanism,
         input_speed=problem.input_speed)

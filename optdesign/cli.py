@@ -18,6 +18,7 @@ COMMANDS = [
     "optdesign.commands.driveline",
     "optdesign.commands.curves",
     "optdesign.commands.simulate",
+    "optdesign.commands.bench",
 ]
 
 

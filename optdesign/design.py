@@ -9,6 +9,10 @@ import numpy as np
 from .errors import AssemblyError
 from .mechanisms import get_mechanism
 
+#: |cos μ| may exceed 1 by this much and still count as assembled: none, since past 1 the
+#: floored square root of geometry.circle_intersection puts a spurious spike in the speed
+ASSEMBLY_TOL = 0.0
+
 
 @dataclass(frozen=True)
 class Design:
@@ -70,16 +74,51 @@ class Design:
         return {k: np.array(v).ravel()
                 for k, v in zip(("theta", "dtheta", "ddtheta", "cos_mu"), out)}
 
+    def cos_peaks(self, phi: np.ndarray, eccentricity: float = 1.0,
+                  cos_mu: np.ndarray | None = None, near: float = 1e-3):
+        """Local peaks of |cos μ| of every chain with |cos μ| > 1 - ``near`` on the grid
+        ``phi``, refined between the neighbouring samples: [(chain, angle, |cos μ|)].
+
+        Where |cos μ| peaks the chain is closest to folding (μ -> 0 or 180°); a peak above 1
+        between two samples is a failure to assemble that the samples alone would miss.
+        """
+        from scipy.optimize import minimize_scalar
+
+        if cos_mu is None:
+            cos_mu = self.sample(phi, eccentricity)["cos_mu"]
+        a = np.abs(cos_mu)
+        n, two_pi = phi.size, 2 * np.pi
+        out = []
+        for k in range(a.shape[0]):
+            row = a[k]
+            for j in np.nonzero((row >= np.roll(row, 1)) & (row >= np.roll(row, -1)) &
+                                (row > 1.0 - near) & np.isfinite(row))[0]:
+                lo = phi[j - 1] - (two_pi if j == 0 else 0.0)
+                hi = phi[(j + 1) % n] + (two_pi if j == n - 1 else 0.0)
+                res = minimize_scalar(lambda x: -abs(self.at(x % two_pi, eccentricity)
+                                                     ["cos_mu"][k]),
+                                      bounds=(lo, hi), method="bounded",
+                                      options={"xatol": 1e-12})
+                x, c = (res.x, -res.fun) if -res.fun > row[j] else (phi[j], row[j])
+                out.append((k, float(x % two_pi), float(c)))
+        return out
+
     def check_assembly(self, eccentricity: float = 1.0, n_samples: int = 2048) -> None:
         """Raise :class:`AssemblyError` naming the first chain and crank angle that fail.
 
         A chain assembles while the discriminant 1 - cos²μ >= 0 (shared/DESIGN.md 1.1); the
-        failing angle is located by bisection to 1e-9 rad.
+        failing angle is located by bisection to 1e-9 rad. Peaks of |cos μ| near 1 are refined
+        between the samples, so a chain that fails only between two samples is caught too.
         """
         phi = np.linspace(0.0, 2 * np.pi, n_samples, endpoint=False)
         cos_mu = self.sample(phi, eccentricity)["cos_mu"]
         bad = ~(np.abs(cos_mu) <= 1.0)
         if not bad.any():
+            for chain, angle, c in self.cos_peaks(phi, eccentricity, cos_mu):
+                if c > 1.0 + ASSEMBLY_TOL:
+                    raise AssemblyError(chain + 1, float(np.degrees(angle)) % 360.0,
+                                        f"the rod and rocker cannot reach each other; "
+                                        f"eccentricity {eccentricity:g}")
             return
         j = int(np.argmax(bad.any(axis=0)))
         chain = int(np.argmax(bad[:, j]))

@@ -19,6 +19,13 @@ from .mechanisms import STROKE_SIGNS
 
 TWO_PI = 2 * np.pi
 DEFAULT_GRID = 1024
+#: a local peak of |cos μ| this close to 1 is a toggle (rod and rocker folded, μ = 0 or 180°):
+#: the rocker speed jumps there, so its one-sided limits are candidate extremes. Farther from
+#: 1 the speed changes steeply but smoothly, and the stationary points catch its extremes.
+TOGGLE_TOL = 1e-13
+#: offset of the two points each side of a toggle from which its one-sided limit is
+#: extrapolated (well outside geometry.SQRT_FLOOR's ~1e-6 rad, error O(step²))
+TOGGLE_STEP = 1e-4
 
 
 @dataclass(frozen=True)
@@ -74,12 +81,26 @@ def exact_figures(design, stroke: str, input_speed: float, eccentricity: float =
         values.append(_envelope_at(curves, np.array([run.start, run.end])))
     for b in breaks:                                      # one-sided limits at jumps of f
         values.append(_envelope_at(curves, np.array([b - 1e-10, b + 1e-10])))
+    for b in toggles(design, eccentricity, phi):
+        h = TOGGLE_STEP
+        near = _envelope_at(curves, np.array([b - 2 * h, b - h, b + h, b + 2 * h]))
+        values.append(np.array([2 * near[1] - near[0], 2 * near[2] - near[3]]))
     values = np.concatenate([np.atleast_1d(v) for v in values])
     mean = sum(_increment(curves, run, phi, theta) for run in runs) / TWO_PI
     figures = StrokeFigures.from_extremes(values.max() * input_speed,
                                           values.min() * input_speed,
                                           mean * input_speed, input_speed)
     return figures, runs
+
+
+def toggles(design, eccentricity: float, phi: np.ndarray) -> list[float]:
+    """Crank angles where a chain reaches a toggle, |cos μ| = 1 at a local peak.
+
+    A linkage at the edge of assembly, or at the Grashof limit s + l = p + q, folds flat there
+    without jamming: the half-chord of the circle intersection goes as |φ - φ0|, so the
+    rocker speed jumps.
+    """
+    return [x for _, x, c in design.cos_peaks(phi, eccentricity) if c >= 1.0 - TOGGLE_TOL]
 
 
 def _envelope_at(curves: _Curves, phi: np.ndarray) -> np.ndarray:

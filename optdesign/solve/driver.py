@@ -7,6 +7,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..accuracy import solve_accuracy
 from ..design import Design
 from .nlp import PhaseNLP
 from .result import PhaseResult, SolveResult, StartRecord
@@ -29,14 +30,16 @@ class PhaseSolver:
         self.count = count
         self._nlps: dict = {}
 
-    def nlp(self, sequences, extra_angle: float) -> PhaseNLP:
-        key = (sequences, round(extra_angle, 6))
+    def nlp(self, sequences, extra_angle: float, hessian: str | None = None) -> PhaseNLP:
+        hessian = hessian or self.problem.solver.hessian
+        key = (sequences, round(extra_angle, 6), hessian)
         if key not in self._nlps:
             c = self.problem.constraints
             mu = min(c.min_transmission_angle_deg + extra_angle, 89.0) if \
                 c.min_transmission_angle_deg > 0 else 0.0
             tightened = replace(self.problem, constraints=replace(
-                c, min_transmission_angle_deg=mu))
+                c, min_transmission_angle_deg=mu), solver=replace(self.problem.solver,
+                                                                   hessian=hessian))
             self._nlps[key] = PhaseNLP(tightened, self.count, sequences)
         return self._nlps[key]
 
@@ -49,7 +52,7 @@ class PhaseSolver:
         for i, e in enumerate(nlp.eccs):
             tag = f"e{e:g}"
             fig = ver.figures[i]
-            guess[f"w_{tag}"] = [fig.omega_max / w1, fig.omega_min / w1]
+            guess[f"w_{tag}"] = [fig.omega_max / (w1 * e), fig.omega_min / (w1 * e)]
             dth = design.sample(nlp.phi, e)["dtheta"]
             f = np.vstack([s * dth for s in nlp.signs])
             guess[f"phi_peak_{tag}"] = nlp.phi[np.argmax(f, axis=1)]
@@ -75,11 +78,12 @@ class PhaseSolver:
         iterations, extra_angle, status, surrogate = 0, ANGLE_SAFETY_DEG, "not run", None
         multiplier = None
         note = ""
+        hessian = problem.solver.hessian
         for _ in range(MAX_REFINEMENTS):
             if not ver.sequences:
                 note = ver.message
                 break
-            nlp = self.nlp(ver.sequences, extra_angle)
+            nlp = self.nlp(ver.sequences, extra_angle, hessian)
             guess = self.guess(nlp, ver, values)
             lbx, ubx = nlp.bounds(guess)
             x0 = np.clip(nlp.pack(guess), lbx, ubx)
@@ -98,6 +102,12 @@ class PhaseSolver:
             ripples = np.array(nlp.surrogate(x, params)[0]).ravel()
             listed = [i for i, e in enumerate(nlp.eccs) if e in problem.eccentricities]
             surrogate = float(ripples[listed].max())
+            if status == "Maximum_Iterations_Exceeded" and hessian == "limited-memory":
+                # The quasi-Newton run stalled: once more from the same start with CasADi's
+                # exact Hessian, which converges, or certifies local infeasibility, where
+                # L-BFGS wanders (benchmarks/hessian_choice.py).
+                hessian = "exact"
+                continue
             if status not in SUCCESS:
                 note = _binding(nlp, np.array(sol["g"]).ravel())
                 values, ver = (trial, new) if new.sequences else (values, ver)
@@ -128,6 +138,10 @@ def _binding(nlp: PhaseNLP, g: np.ndarray) -> str:
 
 def solve_phase(problem, count: int, progress=None) -> PhaseResult:
     """Best verified optimum of one phase count over the multi-start."""
+    if not problem.free_lengths():
+        fixed = _fixed_infeasible(problem, count)
+        if fixed is not None:
+            return fixed
     solver = PhaseSolver(problem, count)
     starts = start_designs(problem, count, problem.solver.starts)
     if not starts:
@@ -143,11 +157,12 @@ def solve_phase(problem, count: int, progress=None) -> PhaseResult:
         if progress:
             progress()
         if not record.feasible:
-            # Stopping rule for infeasible problems: the last `agree + 1` starts all ended
-            # infeasible on the same constraint.
-            last = [s.note for s in result.starts[-(problem.solver.agree + 1):]]
-            if best_key == math.inf and len(last) == problem.solver.agree + 1 and \
-                    last[0] and len(set(last)) == 1:
+            # Stopping rule for infeasible problems: no start feasible, and IPOPT found
+            # `agree + 1` of them locally infeasible on this same constraint.
+            verdicts = [s.note for s in result.starts
+                        if s.ipopt_status == "Infeasible_Problem_Detected"]
+            if best_key == math.inf and record.note and \
+                    verdicts.count(record.note) >= problem.solver.agree + 1:
                 break
             continue
         key = ver.delta if problem.objective.minimize == "ripple" else -ver.ratio
@@ -162,14 +177,26 @@ def solve_phase(problem, count: int, progress=None) -> PhaseResult:
     if result.status != "optimal":
         notes = [s.note for s in result.starts if s.note]
         statuses = {s.ipopt_status for s in result.starts}
-        infeasible = all(not s.feasible for s in result.starts) and (
-            "Infeasible_Problem_Detected" in statuses or notes)
-        result.status = "infeasible" if infeasible else "failed"
+        # Infeasible only on IPOPT's word; starts that ran out of iterations prove nothing.
+        result.status = "infeasible" if "Infeasible_Problem_Detected" in statuses else "failed"
         result.binding = max(set(notes), key=notes.count) if notes else None
         result.message = (f"no start reached a verified feasible optimum (IPOPT: "
                           f"{', '.join(sorted(statuses))})"
                           + (f"; binding: {result.binding}" if result.binding else ""))
     return result
+
+
+def _fixed_infeasible(problem, count: int) -> PhaseResult | None:
+    """Every length fixed and the exact check fails: nothing for IPOPT to move, so say which
+    constraint the design violates (instead of IPOPT failing on the NLP's inner variables)."""
+    values = problem.start_values() | {problem.model.count_variable: count}
+    ver = verify(problem, values)
+    if ver.feasible:
+        return None
+    names = ", ".join(ver.violations)
+    return PhaseResult(count, "infeasible", binding=next(iter(ver.violations), None),
+                       message=f"the fixed design violates {names}"
+                               + (f" ({ver.message})" if ver.message else ""))
 
 
 def _fill(result: PhaseResult, problem, values, ver: Verification, surrogate) -> PhaseResult:
@@ -202,6 +229,7 @@ def solve(problem, progress=None) -> SolveResult:
     else:
         status = "infeasible" if all(p.status == "infeasible" for p in per_phase) else "failed"
         message = "; ".join(f"n={p.phases}: {p.message}" for p in per_phase)
+    accuracy = solve_accuracy(problem, best)        # inside solve_time_s: part of the solve
     return SolveResult(
         name=problem.name, status=status,
         design=best.design if best else None,
@@ -215,10 +243,6 @@ def solve(problem, progress=None) -> SolveResult:
                    "min_ratio": problem.objective.min_ratio,
                    "max_ripple": problem.objective.max_ripple,
                    "eccentricities": list(problem.eccentricities)},
-        accuracy={"verification": "exact evaluator (crossings and stationary points by "
-                                  "Brent's method; mean from exact angle increments)",
-                  "nlp_samples": problem.solver.samples,
-                  "nlp_smoothing": problem.solver.smoothing,
-                  "verification_tolerance_angle_deg": 1e-3},
+        accuracy=accuracy,
         message=message, stroke=problem.stroke, mechanism=problem.mechanism,
         input_speed=problem.input_speed)

@@ -104,7 +104,9 @@ class PhaseNLP:
         self.model = model
         self.free = problem.free_lengths()
         self.fixed = [k for k in model.lengths if k not in self.free]
-        self.scale = np.array([problem.design[k].upper for k in self.free])
+        # geometric mean of the bounds: O(1) scaled variables even when a range spans decades
+        self.scale = np.array([math.sqrt(problem.design[k].lower * problem.design[k].upper)
+                               for k in self.free])
         self.signs = STROKE_SIGNS[problem.stroke]
         self.n_curves = count * len(self.signs)
         self.eccs = self._eccentricities()
@@ -154,6 +156,10 @@ class PhaseNLP:
             pvec = ca.vertcat(*[lengths[k] * (e if k == self.model.regulating_variable else 1)
                                 for k in self.model.lengths])
             theta, dtheta, _, cos_mu = fmap(self.phi[None, :], pvec)
+            # Speeds of eccentricity e in units of e·ω1: they shrink like e, and at e = 1e-6
+            # they would sit below IPOPT's tolerances and bound push (DESIGN.md 1.1: ripple
+            # and ratio are ratios, so the unit cancels).
+            dtheta = dtheta / e
             f = ca.vertcat(*[s * dtheta for s in self.signs])            # curves × N
             w = variable(f"w_{tag}", 2)
             w_hi, w_lo = w[0], w[1]
@@ -166,6 +172,7 @@ class PhaseNLP:
             # Exact peaks: one stationary point per curve.
             phi_m = variable(f"phi_peak_{tag}", self.n_curves)
             _, dth_m, ddth_m, _ = fn.map(self.n_curves)(phi_m.T, pvec)
+            dth_m, ddth_m = dth_m / e, ddth_m / e
             f_m = ca.vertcat(*[self._curve(dth_m, c, c) for c in range(self.n_curves)])
             df_m = ca.vertcat(*[self._curve(ddth_m, c, c) for c in range(self.n_curves)])
             constrain(f"peak_stationary[{tag}]", df_m, 0.0, 0.0)
@@ -175,6 +182,7 @@ class PhaseNLP:
             m = len(seq)
             phi_x = variable(f"phi_handover_{tag}", m)
             th_x, dth_x, _, _ = fn.map(m)(phi_x.T, pvec)
+            dth_x = dth_x / e
             lows, mean = [], 0
             for i in range(m):
                 before, after = seq[i - 1], seq[i]
@@ -183,7 +191,7 @@ class PhaseNLP:
                     nxt = (i + 1) % m
                     mean += _wrap(self._curve(th_x, after, nxt) - self._curve(th_x, after, i))
             constrain(f"trough_handovers[{tag}]", ca.vertcat(*lows))
-            mean = mean / (2 * math.pi)
+            mean = mean / (2 * math.pi * e)
             definition = P.objective.ripple
             avg = 0.5 * (w_hi + w_lo) if definition == "midrange" else mean
             ripples.append((w_hi - w_lo) / avg)
@@ -240,7 +248,7 @@ class PhaseNLP:
         lbx, ubx = np.full(self.n_x, -np.inf), np.full(self.n_x, np.inf)
         sl = L.find(L.x, "lengths")
         lbx[sl] = [P.design[k].lower / s for k, s in zip(self.free, self.scale)]
-        ubx[sl] = 1.0
+        ubx[sl] = [P.design[k].upper / s for k, s in zip(self.free, self.scale)]
         half_window = math.pi / self.n_curves
         for block in L.x:
             if block.name.startswith(("phi_peak", "phi_handover")):

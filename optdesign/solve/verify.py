@@ -19,7 +19,9 @@ from ..exact import exact_figures
 #: Tolerances of the exact check: a constraint violated by less is taken as met.
 TOL_ANGLE_DEG = 1e-3
 TOL_RATIO = 1e-7
-TOL_LENGTH = 1e-5                     # mm: 10 nm, far below any manufacturing tolerance
+#: length constraints (pin radius, Grashof), relative to the design's longest length:
+#: 4e-5 mm at 400 mm, far below any manufacturing tolerance, and the same in any unit.
+TOL_LENGTH_REL = 1e-7
 
 
 @dataclass
@@ -79,11 +81,12 @@ def verify(problem, values: dict[str, float]) -> Verification:
     if problem.objective.minimize == "-ratio":
         _violated(ver, "max_ripple", ver.delta - problem.objective.max_ripple, TOL_RATIO)
     lengths = {k: design.values[k] for k in model.lengths}
+    tol_length = TOL_LENGTH_REL * max(abs(v) for v in lengths.values())
     for name, g in model.design_constraints(lengths, design.count, c):
-        _violated(ver, name, -float(g), TOL_LENGTH)
+        _violated(ver, name, -float(g), tol_length)
     if c.grashof and hasattr(model, "grashof_constraints"):
         for name, g in model.grashof_constraints(lengths):
-            _violated(ver, name, -float(g), TOL_LENGTH)
+            _violated(ver, name, -float(g), tol_length)
     sections_verify = [(k, s) for k, s in problem.sections.items() if hasattr(s, "verify")]
     if sections_verify:
         from ..analysis import analyze

@@ -1,0 +1,366 @@
+"""Error against run time of every evaluator of the output envelope (``optdesign bench accuracy``).
+
+Four ways to get δ, the ratio and ω_min of one design (shared/DESIGN.md 1.1 and section 2):
+
+* ``sampled``: :func:`optdesign.envelope.sampled_figures` at N equally spaced crank angles;
+* ``exact``: :func:`optdesign.exact.exact_figures` (crossings and stationary points by Brent),
+  with a coarser or finer search grid ``n_grid``;
+* ``surrogate``: the NLP's own view (:mod:`optdesign.solve.nlp`) at the design with its lengths
+  held fixed: IPOPT moves only the envelope variables (w_hi, w_lo, the peak and hand-over
+  angles), so ``PhaseNLP.surrogate`` returns what the optimiser believes of that design, for
+  ``samples`` N and log-sum-exp smoothing ρ;
+* ``lse``: a plain log-sum-exp formulation without the NLP's exact hand-over and peak points:
+  ω_max the sampled maximum, ω_min = min_j LSE_ρ(f(φ_j)), mean = mean_j LSE_ρ(f(φ_j)). It shows
+  what the hand-over points buy.
+
+Each is compared with a tight reference: the exact evaluator on a 16384-point grid, optionally
+cross-checked by a chunked sampled evaluation on 2·10^6 crank angles. Errors are absolute for δ
+and the ratio (both dimensionless), relative for ω_min.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .design import Design
+from .envelope import StrokeFigures, output_envelope, sampled_figures
+from .exact import DEFAULT_GRID, exact_figures
+
+REFERENCE_GRID = 16384
+SAMPLED_N = (16, 32, 64, 90, 128, 256, 512, 1024, 4096, 16384, 65536)
+EXACT_GRID = (8, 16, 32, 64, 128, 256, 1024, 4096)
+SURROGATE_N = (30, 45, 60, 90, 180, 360)
+SMOOTHING = (50.0, 200.0, 1000.0)
+#: (samples, smoothing) pairs of the full solves, and the tightest one (SOLVE_REFERENCE); each
+#: verified optimum is measured against the best of them
+SOLVE_SETTINGS = ((30, 200.0), (45, 200.0), (90, 50.0), (90, 200.0), (90, 1000.0),
+                  (180, 200.0))
+SOLVE_QUICK = ((45, 200.0), (90, 200.0))
+SOLVE_REFERENCE = (360, 200.0)
+
+
+@dataclass(frozen=True)
+class Reference:
+    figures: StrokeFigures
+    method: str
+    crosscheck: dict | None = None
+
+
+def chunked_sampled_figures(design, stroke: str, input_speed: float, n_samples: int,
+                            eccentricity: float = 1.0, chunk: int = 1 << 17) -> StrokeFigures:
+    """:func:`sampled_figures` in chunks, so 10^6 and more samples fit in memory."""
+    phi = np.linspace(0.0, 2 * np.pi, n_samples, endpoint=False)
+    hi, lo, total = -math.inf, math.inf, 0.0
+    for start in range(0, n_samples, chunk):
+        part = phi[start:start + chunk]
+        env = output_envelope(design.sample(part, eccentricity)["dtheta"], stroke)
+        hi, lo, total = max(hi, env.max()), min(lo, env.min()), total + env.sum()
+    w1 = input_speed
+    return StrokeFigures.from_extremes(hi * w1, lo * w1, total / n_samples * w1, w1)
+
+
+def reference_figures(design, stroke, input_speed, eccentricity=1.0,
+                      crosscheck_samples: int = 0) -> Reference:
+    """Exact figures on a 16384-point grid; with ``crosscheck_samples`` also the sampled
+    figures on that many angles and their differences (O(h) at the kinks, so ~1e-6 at 2·10^6)."""
+    fig, _ = exact_figures(design, stroke, input_speed, eccentricity, n_grid=REFERENCE_GRID)
+    method = f"exact evaluator, n_grid = {REFERENCE_GRID}"
+    check = None
+    if crosscheck_samples:
+        t0 = time.perf_counter()
+        s = chunked_sampled_figures(design, stroke, input_speed, crosscheck_samples,
+                                    eccentricity)
+        check = {"samples": crosscheck_samples, "time_s": time.perf_counter() - t0,
+                 **_errors(s, fig), "sampled_minus_exact_delta": s.delta - fig.delta}
+    return Reference(fig, method, check)
+
+
+def _errors(fig: StrokeFigures, ref: StrokeFigures) -> dict:
+    return {"delta_error": abs(fig.delta - ref.delta),
+            "ratio_error": abs(fig.ratio - ref.ratio),
+            "omega_min_error": abs(fig.omega_min - ref.omega_min) / ref.omega_min
+            if ref.omega_min > 0 else abs(fig.omega_min),
+            "delta_signed": fig.delta - ref.delta}
+
+
+def _timed(fn, min_time: float = 0.05, max_repeats: int = 50):
+    """(result, seconds per call): repeated until ``min_time`` has passed, best of the calls."""
+    best, out, spent, n = math.inf, None, 0.0, 0
+    while n < max_repeats and (n == 0 or spent < min_time):
+        t0 = time.perf_counter()
+        out = fn()
+        dt = time.perf_counter() - t0
+        best, spent, n = min(best, dt), spent + dt, n + 1
+    return out, best
+
+
+# --------------------------------------------------------------------------- evaluators
+def sampled_rows(design, stroke, input_speed, ref: Reference, samples=SAMPLED_N, e=1.0):
+    rows = []
+    for n in samples:
+        fig, t = _timed(lambda: chunked_sampled_figures(design, stroke, input_speed, n, e)
+                        if n > 65536 else sampled_figures(design, stroke, input_speed, n, e))
+        rows.append({"method": "sampled", "samples": n, "smoothing": None, "time_s": t,
+                     **_errors(fig, ref.figures)})
+    return rows
+
+
+def exact_rows(design, stroke, input_speed, ref: Reference, grids=EXACT_GRID, e=1.0):
+    rows = []
+    for n in grids:
+        fig, t = _timed(lambda: exact_figures(design, stroke, input_speed, e, n_grid=n)[0])
+        rows.append({"method": "exact", "samples": n, "smoothing": None, "time_s": t,
+                     **_errors(fig, ref.figures)})
+    return rows
+
+
+def lse_figures(design, stroke, input_speed, n_samples, rho, e=1.0) -> StrokeFigures:
+    """The plain log-sum-exp formulation (no exact hand-over or peak points), see module doc."""
+    from .envelope import driving_speeds
+    phi = np.linspace(0.0, 2 * np.pi, n_samples, endpoint=False)
+    f = driving_speeds(design.sample(phi, e)["dtheta"], stroke)
+    top = f.max(axis=0)
+    lse = top + np.log(np.exp(rho * (f - top)).sum(axis=0)) / rho
+    w1 = input_speed
+    return StrokeFigures.from_extremes(top.max() * w1, lse.min() * w1, lse.mean() * w1, w1)
+
+
+def lse_rows(design, stroke, input_speed, ref: Reference, samples=SURROGATE_N,
+             smoothings=SMOOTHING, e=1.0):
+    rows = []
+    for rho in smoothings:
+        for n in samples:
+            fig, t = _timed(lambda: lse_figures(design, stroke, input_speed, n, rho, e))
+            rows.append({"method": "lse", "samples": n, "smoothing": rho, "time_s": t,
+                         **_errors(fig, ref.figures)})
+    return rows
+
+
+def surrogate_figures(problem, values, samples: int, smoothing: float):
+    """The NLP's view of one fixed design: (StrokeFigures at e = 1, inner solve time, time of
+    one evaluation of the NLP's constraints and their Jacobian, IPOPT status)."""
+    from .solve.driver import PhaseSolver
+    from .solve.verify import verify
+
+    fixed = problem.with_values(values)
+    fixed = replace(fixed, solver=replace(problem.solver, samples=samples, smoothing=smoothing),
+                    objective=replace(problem.objective, minimize="ripple", min_ratio=0.0),
+                    eccentricities=(1.0,))
+    count = int(round(values[problem.model.count_variable]))
+    solver = PhaseSolver(fixed, count)
+    ver = verify(fixed, values)
+    if not ver.sequences:
+        from .errors import SolveError
+        raise SolveError(f"the NLP cannot evaluate this design: {ver.message}")
+    nlp = solver.nlp(ver.sequences, 0.0)
+    guess = solver.guess(nlp, ver, values)
+    lbx, ubx = nlp.bounds(guess)
+    x0 = np.clip(nlp.pack(guess), lbx, ubx)
+    params = nlp.parameters()
+    t0 = time.perf_counter()
+    sol = nlp.solver(x0=x0, lbx=lbx, ubx=ubx, lbg=nlp.lbg, ubg=nlp.ubg, p=params)
+    t_solve = time.perf_counter() - t0
+    status = nlp.solver.stats()["return_status"]
+    x = np.array(sol["x"]).ravel()
+    ripples, means, peaks = (np.array(v).ravel() for v in nlp.surrogate(x, params))
+    w_hi, w_lo = nlp.unpack(x)["w_e1"]
+    jac = nlp.solver.get_function("nlp_jac_g")
+    _, t_eval = _timed(lambda: jac(x, params), min_time=0.02)
+    w1 = problem.input_speed
+    fig = StrokeFigures.from_extremes(w_hi * w1, w_lo * w1, means[0] * w1, w1)
+    return fig, t_solve, t_eval, status
+
+
+def surrogate_rows(problem, values, ref: Reference, samples=SURROGATE_N, smoothings=SMOOTHING):
+    rows = []
+    for rho in smoothings:
+        for n in samples:
+            fig, t_solve, t_eval, status = surrogate_figures(problem, values, n, rho)
+            rows.append({"method": "surrogate", "samples": n, "smoothing": rho,
+                         "time_s": t_solve, "eval_time_s": t_eval, "ipopt_status": status,
+                         **_errors(fig, ref.figures)})
+    return rows
+
+
+def solve_rows(problem, settings=SOLVE_SETTINGS, reference=SOLVE_REFERENCE):
+    """Full solves of ``problem`` at several (samples, smoothing), ``reference`` (the tightest)
+    first: run time, and each verified optimum's δ and ratio against the best of them."""
+    from .solve import solve, verify
+
+    runs = []
+    for n, rho in (reference,) + tuple(settings):
+        p = replace(problem, solver=replace(problem.solver, samples=n, smoothing=rho))
+        r = solve(p)
+        ok = r.status == "optimal" and verify(p, r.design).feasible
+        runs.append((n, rho, r, ok))
+    # Reference: the best verified optimum of every setting (the tightest one included): a
+    # multistart may stop at a slightly worse local optimum, whatever its sampling.
+    verified = [r for _, _, r, ok in runs if ok]
+    ref = (min(verified, key=lambda r: r.delta) if problem.objective.minimize == "ripple"
+           else max(verified, key=lambda r: r.ratio)) if verified else runs[0][2]
+    rows = []
+    for n, rho, r, ok in runs:
+        gap = r.best_phase().surrogate_gap if r.best_phase() else None
+        rows.append({"method": "solve", "samples": n, "smoothing": rho,
+                     "tightest": (n, rho) == tuple(reference),
+                     "time_s": r.solve_time_s, "status": r.status, "verified": ok,
+                     "delta": r.delta, "ratio": r.ratio, "surrogate_gap": gap,
+                     "delta_error": abs(r.delta - ref.delta) if ok and ref.delta else None,
+                     "ratio_error": abs(r.ratio - ref.ratio) if ok and ref.ratio else None,
+                     "reference_delta": ref.delta, "iterations": r.iterations,
+                     "angle_sample_gap_deg": r.accuracy["transmission_angle_sample_gap_deg"],
+                     "starts": sum(len(ph.starts) for ph in r.per_phase)})
+    return rows
+
+
+def accuracy_rows(problem, values=None, e: float = 1.0, crosscheck_samples: int = 0,
+                  solve_problem=None, quick: bool = False) -> tuple[list[dict], Reference]:
+    """Every row of the benchmark for the problem's design (at its fixed / initial values)."""
+    design = Design.from_problem(problem, values)
+    design.check_assembly(e)
+    args = (design, problem.stroke, problem.input_speed)
+    ref = reference_figures(*args, e, crosscheck_samples)
+    sampled = SAMPLED_N[:-2] if quick else SAMPLED_N
+    grids = (8, 64, DEFAULT_GRID) if quick else EXACT_GRID
+    rows = sampled_rows(*args, ref, sampled, e) + exact_rows(*args, ref, grids, e)
+    if e == 1.0:
+        nsur = (45, 90) if quick else SURROGATE_N
+        rows += lse_rows(*args, ref, nsur)
+        rows += surrogate_rows(problem, dict(design.values), ref, nsur,
+                               (200.0,) if quick else SMOOTHING)
+    if solve_problem is not None:
+        rows += solve_rows(solve_problem, SOLVE_QUICK if quick else SOLVE_SETTINGS)
+    return rows, ref
+
+
+# --------------------------------------------------------------------------- presenting
+def format_table(rows: list[dict], ref: Reference) -> str:
+    f = ref.figures
+    lines = [f"reference: {ref.method}: δ = {f.delta:.12g}, ratio = {f.ratio:.12g}, "
+             f"ω_min = {f.omega_min:.12g} rad/s"]
+    if ref.crosscheck:
+        c = ref.crosscheck
+        lines.append(f"cross-check: sampled at {c['samples']} angles differs by "
+                     f"δ {c['delta_error']:.2e}, ratio {c['ratio_error']:.2e}, "
+                     f"ω_min {c['omega_min_error']:.2e} (relative)")
+    lines.append(f"{'method':<10} {'N':>6} {'ρ':>6} {'δ error':>9} {'ratio err':>9} "
+                 f"{'ω_min err':>9} {'time [s]':>9}")
+    for r in rows:
+        rho = "" if r.get("smoothing") is None else f"{r['smoothing']:g}"
+        cells = [_sci(r.get(k)) for k in ("delta_error", "ratio_error", "omega_min_error")]
+        extra = ""
+        if r["method"] == "solve":
+            extra = f"  {r['status']}, δ = {r['delta']:.6f}" if r["delta"] is not None else \
+                f"  {r['status']}"
+        lines.append(f"{r['method']:<10} {r['samples']:>6} {rho:>6} {cells[0]:>9} "
+                     f"{cells[1]:>9} {cells[2]:>9} {r['time_s']:9.2e}{extra}")
+    return "\n".join(lines)
+
+
+def _sci(v) -> str:
+    return "-" if v is None else f"{v:.2e}"
+
+
+def plot_accuracy(rows: list[dict], ax=None, title: str | None = None):
+    """δ error against run time, log-log, one line per method (and per ρ); returns the figure."""
+    from .plots import _pyplot
+    plt = _pyplot()
+    fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(figsize=(8, 5.2))
+    floor = 1e-16
+    groups: dict[tuple, list[dict]] = {}
+    for r in rows:
+        if r.get("delta_error") is None:
+            continue
+        key = (r["method"], None if r["method"] == "solve" else r.get("smoothing"))
+        groups.setdefault(key, []).append(r)
+    styles = {"sampled": ("o", "-"), "exact": ("s", "-"), "surrogate": ("^", "--"),
+              "lse": ("v", ":"), "solve": ("D", "")}
+    for (method, rho), rs in groups.items():
+        rs = sorted(rs, key=lambda r: r["time_s"])
+        marker, ls = styles.get(method, ("x", "-"))
+        label = _label(method, rho)
+        t = [r["time_s"] for r in rs]
+        err = [max(r["delta_error"], floor) for r in rs]
+        ax.plot(t, err, marker=marker, ls=ls or "none", label=label, ms=5)
+        if method in ("sampled", "exact", "surrogate", "solve"):
+            for r, x, y in zip(rs, t, err):
+                text = str(r["samples"]) if method != "solve" else \
+                    f"N={r['samples']}, ρ={r['smoothing']:g}"
+                ax.annotate(text, (x, y), fontsize=6.5, alpha=0.75,
+                            xytext=(3, 3), textcoords="offset points")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("run time per evaluation (per solve for full solves) [s]")
+    ax.set_ylabel("|δ - δ_reference|  (errors below 1e-16 drawn at 1e-16)")
+    ax.set_title(title or "Ripple error against run time")
+    ax.grid(True, which="major", alpha=0.35)
+    ax.legend(fontsize=7.5, loc="best")
+    fig.tight_layout()
+    return fig
+
+
+def _label(method: str, rho) -> str:
+    if method == "surrogate":
+        return f"NLP surrogate, ρ = {rho:g} (inner IPOPT solve)"
+    if method == "lse":
+        return f"plain log-sum-exp, ρ = {rho:g}"
+    return {"sampled": "sampled, N samples", "exact": "exact, n_grid",
+            "solve": "full solves (δ minus the best solve's δ)"}.get(method, method)
+
+
+# --------------------------------------------------------------------------- solve results
+def solve_accuracy(problem, best) -> dict:
+    """The ``accuracy`` dict of a :class:`~optdesign.solve.result.SolveResult`.
+
+    Which evaluators were used and, at the returned optimum ``best`` (a PhaseResult or None),
+    their estimated errors:
+
+    * ``exact_error_estimate``: largest change of δ and of the ratio over the listed
+      eccentricities when the exact evaluator's search grid is refined from ``exact_grid`` to
+      4·``exact_grid`` (its root finding is to 1e-14 rad, so this is ~1e-15 unless a run or a
+      stationary point was missed);
+    * ``surrogate_gap``: the NLP's δ minus the exact δ at the optimum (the log-sum-exp part of
+      the surrogate only matters at minima inside a run; hand-overs and peaks are exact);
+    * ``transmission_angle_sample_gap_deg``: least transmission angle at the NLP's crank samples
+      minus the exact least angle (what sampling the constraint misses; the driver tightens the
+      NLP's bound by it and re-solves when the exact check fails).
+    """
+    from .solve.verify import TOL_ANGLE_DEG, TOL_LENGTH_REL, TOL_RATIO, eccentricities_of
+
+    s = problem.solver
+    out = {"verification": "exact evaluator (crossings and stationary points by Brent's "
+                           "method; mean from exact angle increments)",
+           "nlp_samples": s.samples, "nlp_smoothing": s.smoothing,
+           "verification_tolerance_angle_deg": TOL_ANGLE_DEG,
+           "verification_tolerances": {"angle_deg": TOL_ANGLE_DEG, "ratio": TOL_RATIO,
+                                       "length_relative": TOL_LENGTH_REL},
+           "exact_grid": DEFAULT_GRID,
+           "exact_error_estimate": None, "surrogate_gap": None,
+           "transmission_angle_sample_gap_deg": None,
+           "benchmark": "optdesign bench accuracy (docs/accuracy.md)"}
+    if best is None or best.design is None:
+        return out
+    design = Design.from_problem(problem, best.design)
+    d_delta = d_ratio = 0.0
+    phi = np.linspace(0.0, 2 * np.pi, s.samples, endpoint=False)
+    sampled_angle = math.inf
+    for e in eccentricities_of(problem):          # e = 1 (the ratio) and the listed ones
+        coarse, _ = exact_figures(design, problem.stroke, problem.input_speed, e)
+        fine, _ = exact_figures(design, problem.stroke, problem.input_speed, e,
+                                n_grid=4 * DEFAULT_GRID)
+        definition = problem.objective.ripple
+        if e in problem.eccentricities:
+            d_delta = max(d_delta, abs(coarse.ripple(definition) - fine.ripple(definition)))
+        if e == 1.0:
+            d_ratio = abs(coarse.ratio - fine.ratio)
+        cos_mu = np.abs(design.sample(phi, e)["cos_mu"]).clip(max=1.0)
+        sampled_angle = min(sampled_angle, float(np.degrees(np.arccos(cos_mu.max()))))
+    out["exact_error_estimate"] = {"delta": d_delta, "ratio": d_ratio}
+    out["surrogate_gap"] = best.surrogate_gap
+    if best.min_transmission_angle_deg is not None:
+        out["transmission_angle_sample_gap_deg"] = sampled_angle - \
+            best.min_transmission_angle_deg
+    return out

@@ -1,0 +1,60 @@
+"""``optdesign bench accuracy [PROBLEM.yaml] [--json] [--out DIR] [--solve PROBLEM] [--quick]``.
+
+Error of δ, the ratio and ω_min against run time for every evaluator (optdesign.accuracy).
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+DEFAULT_PROBLEM = "problems/sharkov2022.yaml"
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("bench", help="benchmarks: error against run time of the evaluators")
+    p.add_argument("what", choices=["accuracy"], help="which benchmark")
+    p.add_argument("problem", nargs="?", default=DEFAULT_PROBLEM,
+                   help=f"problem file whose design is evaluated (default {DEFAULT_PROBLEM})")
+    p.add_argument("--json", action="store_true", help='print {"rows": [...]} as JSON')
+    p.add_argument("--out", help="folder for accuracy.png and accuracy.json "
+                                 "(default results/NAME/)")
+    p.add_argument("--solve", metavar="PROBLEM",
+                   help="also time full solves of this problem (it needs free lengths)")
+    p.add_argument("--crosscheck", type=int, default=0, metavar="N",
+                   help="cross-check the reference by N crank samples (e.g. 2000000)")
+    p.add_argument("--quick", action="store_true", help="fewer settings (a few seconds)")
+    p.add_argument("--no-plot", action="store_true", help="skip the figure")
+    p.set_defaults(run=run)
+
+
+def run(args) -> int:
+    from ..accuracy import accuracy_rows, format_table, plot_accuracy
+    from ..errors import ProblemError
+    from ..io import atomic_savefig, atomic_write_json
+    from ..problem import load_problem
+
+    problem = load_problem(args.problem)
+    if args.crosscheck < 0:
+        raise ProblemError(f"--crosscheck must not be negative (got {args.crosscheck})")
+    solve_problem = load_problem(args.solve) if args.solve else None
+    if solve_problem is not None and not solve_problem.free_lengths():
+        raise ProblemError(f"{solve_problem.source}: --solve needs a problem with free lengths")
+    rows, ref = accuracy_rows(problem, crosscheck_samples=args.crosscheck,
+                              solve_problem=solve_problem, quick=args.quick)
+    out = Path(args.out) if args.out else Path("results") / problem.name
+    payload = {"problem": problem.name, "reference": {"method": ref.method,
+               **ref.figures.to_dict(), "crosscheck": ref.crosscheck}, "rows": rows}
+    files = [atomic_write_json(out / "accuracy.json", payload)]
+    if not args.no_plot:
+        fig = plot_accuracy(rows, title=f"{problem.name}: δ error against run time")
+        try:
+            files.append(atomic_savefig(fig, out / "accuracy.png", dpi=120))
+        finally:
+            import matplotlib.pyplot as plt
+            plt.close(fig)
+    if args.json:
+        print(json.dumps(payload, indent=2))
+    else:
+        print(format_table(rows, ref))
+        print(f"wrote {', '.join(str(f) for f in files)}")
+    return 0

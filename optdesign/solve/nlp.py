@@ -32,6 +32,9 @@ import numpy as np
 
 from ..mechanisms import STROKE_SIGNS
 
+#: weight of the worst ripple in the ``minimize: -ratio`` objective (a tie-break, see _build)
+RIPPLE_TIE_BREAK = 1e-6
+
 IPOPT_OPTIONS = {
     "ipopt.print_level": 0,
     "ipopt.tol": 1e-9,
@@ -209,13 +212,15 @@ class PhaseNLP:
                 for name, g in section.solve_constraints(P, peaks[0] * P.input_speed):
                     constrain(f"{key}.{name}", ca.vertcat(g))
         listed = [i for i, e in enumerate(self.eccs) if e in P.eccentricities]
+        t = variable("worst_ripple", 1)
+        constrain("ripple_epigraph", ca.vertcat(*[t - ripples[i] for i in listed]))
         if P.objective.minimize == "ripple":
-            t = variable("worst_ripple", 1)
-            constrain("ripple_epigraph", ca.vertcat(*[t - ripples[i] for i in listed]))
             objective = t
         else:
-            constrain("max_ripple", ca.vertcat(*[max_ripple - ripples[i] for i in listed]))
-            objective = -means[0]
+            constrain("max_ripple", max_ripple - t)
+            # The ripple term breaks the tie lexicographically: it keeps w_hi and w_lo tight
+            # when the cap is slack (so the surrogate δ stays exact) for at most ~1e-6 of ratio.
+            objective = -means[0] + RIPPLE_TIE_BREAK * t
         x = ca.vertcat(*x_parts)
         g = ca.vertcat(*g_parts)
         self.lbg, self.ubg = np.array(lbg), np.array(ubg)

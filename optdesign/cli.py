@@ -17,6 +17,7 @@ COMMANDS = [
     "optdesign.commands.solve",
     "optdesign.commands.driveline",
     "optdesign.commands.curves",
+    "optdesign.commands.pareto",
 ]
 
 

@@ -18,6 +18,7 @@ from .mechanisms import get_mechanism
 #: name -> "module:function(section_dict, where) -> parsed object".
 SECTION_PARSERS: dict[str, str] = {
     "driveline": "optdesign.driveline.section:parse_section",
+    "pareto": "optdesign.pareto.section:parse_section",
 }
 
 TOP_KEYS = {"name", "mechanism", "input_speed", "stroke", "design", "options", "constraints",

@@ -55,7 +55,11 @@ def run(args) -> int:
                    resume=args.resume, scheduler=args.scheduler)
     files = write_front(result, out)
     if not args.no_report:
-        files += write_report(result, problem, out, problem_path=args.problem)
+        command = " ".join(["optdesign pareto", args.problem, "--out", str(out)] + [
+            f"--{k} {getattr(args, k)}" for k in ("points", "workers", "scheduler")
+            if getattr(args, k)] + (["--resume"] if args.resume else []))
+        files += write_report(result, problem, out, problem_path=args.problem,
+                              command=command)
     print(summary_text(result))
     print(f"wrote {', '.join(str(f) for f in files)}")
     return 0 if result.indicators["n_points"] else 1

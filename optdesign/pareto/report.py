@@ -9,7 +9,6 @@ from __future__ import annotations
 import base64
 import html
 import platform
-import sys
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -49,7 +48,7 @@ def plot_fronts(points, ax=None, title: str | None = None):
     return fig
 
 
-def run_info(problem, result, problem_path=None) -> dict:
+def run_info(problem, result, problem_path=None, command: str | None = None) -> dict:
     """Problem file, versions, seeds and times: enough to make the run again."""
     import casadi
     import numpy
@@ -67,7 +66,7 @@ def run_info(problem, result, problem_path=None) -> dict:
             "wall_time_s": round(result.run.get("wall_time_s", float("nan")), 2),
             "resumed_points": result.run.get("resumed_points", 0),
             "finished_utc": datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC"),
-            "command": " ".join(["optdesign"] + sys.argv[1:]) if sys.argv else ""}
+            "command": command or ""}
 
 
 def _fmt(v, digits=4):
@@ -186,7 +185,8 @@ def render_html(items) -> str:
             "\n</body></html>\n")
 
 
-def write_report(result, problem, out_dir, problem_path=None) -> list[Path]:
+def write_report(result, problem, out_dir, problem_path=None,
+                 command: str | None = None) -> list[Path]:
     """fronts.png, knee_mechanism.png, knee_speeds.png, report.md and report.html."""
     from ..design import Design
     from ..plots import _pyplot, plot_mechanism, plot_speeds
@@ -211,7 +211,7 @@ def write_report(result, problem, out_dir, problem_path=None) -> list[Path]:
                                 f"ratio = {knee['ratio']:.4f}")
         images["knee_speeds.png"] = atomic_savefig(fig, out / "knee_speeds.png")
         plt.close(fig)
-    info = run_info(problem, result, problem_path)
+    info = run_info(problem, result, problem_path, command)
     items = blocks(result, problem, info, images)
     return list(images.values()) + [
         atomic_write_text(out / "report.md", render_md(items)),

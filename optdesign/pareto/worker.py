@@ -12,6 +12,7 @@ import pickle
 import time
 from dataclasses import replace
 
+from ..errors import OptDesignError
 from ..solve import PhaseSolver, solve_phase
 from ..solve.starts import start_designs
 
@@ -100,7 +101,7 @@ def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
     design); on failure from each of ``fallbacks``, then from the multi-start designs."""
     t0 = time.perf_counter()
     solver = _solver(problem, count)
-    iterations, tries, last = 0, 0, None
+    iterations, tries, last, note = 0, 0, None, "no start design assembles"
 
     def attempts():
         yield from (dict(s) for s in [start, *fallbacks] if s)
@@ -108,7 +109,14 @@ def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
             yield dict(d.values)
 
     for values in attempts():
-        rec, ver, values, _ = solver.solve_from(values, min_ratio=epsilon)
+        try:
+            rec, ver, values, _ = solver.solve_from(values, min_ratio=epsilon)
+        except (OptDesignError, RuntimeError, ValueError, ArithmeticError) as exc:
+            # one start that breaks the evaluator (CasADi raises RuntimeError) is one failed
+            # start, not a failed sweep
+            tries += 1
+            note = f"{type(exc).__name__}: {exc}"
+            continue
         iterations += rec.iterations
         tries += 1
         last = rec
@@ -122,7 +130,7 @@ def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
         last.ipopt_status == "Infeasible_Problem_Detected" or last.note) else "failed"
     return _record(problem, count, index, "sweep", epsilon, None, None, status, None, t0,
                    iterations, tries, last.ipopt_status if last else "",
-                   last.note if last else "no start design assembles")
+                   last.note if last else note)
 
 
 def copy_end(end: dict, index: int) -> dict:

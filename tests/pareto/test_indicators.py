@@ -30,7 +30,7 @@ def test_no_kept_point_is_dominated_and_every_dropped_one_is(points):
         dominated = any(np.all(f[j] <= f[i]) and np.any(f[j] < f[i]) for j in range(len(f)))
         if dominated:
             assert not keep[i]
-        elif keep[i] is False:
+        elif not keep[i]:
             assert any(np.all(f[j] == f[i]) for j in range(i))    # a duplicate of a kept one
 
 

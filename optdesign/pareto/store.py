@@ -13,7 +13,7 @@ import os
 from pathlib import Path
 
 from ..errors import ProblemError
-from ..io import _jsonable
+from ..io import _jsonable, atomic_write_text
 
 
 class Journal:
@@ -49,6 +49,9 @@ class Journal:
                 raise ProblemError(f"{self.path}: cannot resume, the run's settings changed "
                                    f"({', '.join(changed)}); run without --resume to start "
                                    f"afresh")
+            # drop a line a kill cut short, so the next append starts on a line of its own
+            lines = [json.dumps(r, default=_jsonable) for r in [header, *records]]
+            atomic_write_text(self.path, "\n".join(lines) + "\n")
             return records
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.path.write_text("", encoding="utf-8")

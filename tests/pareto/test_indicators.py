@@ -88,3 +88,4 @@ def test_frame_flags_each_counts_front_and_the_overall_front():
     assert df["count_front"].tolist() == [True, True, True, True, False]
     # n = 4's (0.3, 0.9) loses to n = 6's (0.25, 0.95)
     assert df["non_dominated"].tolist() == [True, False, True, True, False]
+

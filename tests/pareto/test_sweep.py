@@ -71,3 +71,12 @@ def test_grid_clips_the_span_to_the_reachable_range():
     assert len(grid(ParetoSection(ratio_lower=0.95), ends, 3)) == 0
     flat = {"least_ripple": {"ratio": 0.5}, "largest_ratio": {"ratio": 0.5}}
     assert grid(ParetoSection(), flat, 5).tolist() == [0.5]          # a one-point front
+
+
+def test_chains_walk_away_from_the_nearer_end():
+    from optdesign.pareto.sweep import _chains
+    eps = np.linspace(0.5, 0.9, 8)
+    assert _chains([1, 2, 3, 4, 5, 6], eps, 2) == [[1, 2, 3], [6, 5, 4]]
+    eps = np.linspace(0.5, 0.9, 10)
+    assert _chains(list(range(1, 9)), eps, 4) == [[1, 2], [3, 4], [6, 5], [8, 7]]
+    assert _chains([], eps, 2) == []

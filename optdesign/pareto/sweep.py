@@ -57,7 +57,7 @@ class _Inline:
     def wait_any(self, futures):
         return {f for f in futures if f.done()}
 
-    def close(self):
+    def close(self, interrupted: bool = False):
         pass
 
 
@@ -76,8 +76,11 @@ class _Pool:
     def wait_any(self, futures):
         return _wait(futures, return_when=FIRST_COMPLETED).done
 
-    def close(self):
-        self.pool.shutdown(wait=False, cancel_futures=True)
+    def close(self, interrupted: bool = False):
+        if interrupted:         # Ctrl-C or an error: do not wait for the points in flight
+            for proc in list(getattr(self.pool, "_processes", {}).values()):
+                proc.terminate()
+        self.pool.shutdown(wait=not interrupted, cancel_futures=True)
 
 
 class _Dask:
@@ -95,7 +98,7 @@ class _Dask:
         from distributed import wait
         return wait(list(futures), return_when="FIRST_COMPLETED").done
 
-    def close(self):
+    def close(self, interrupted: bool = False):
         if self.own:
             self.client.close()
 
@@ -208,6 +211,7 @@ def sweep(problem, out_dir, points: int | None = None, workers: int | None = Non
                                   "eps": eps, "ends": ok_ends}
             submit_chain(count, j)
 
+    interrupted = True
     try:
         for n in counts:
             missing = [k for k in ENDS if (n, k) not in done]
@@ -225,9 +229,10 @@ def sweep(problem, out_dir, points: int | None = None, workers: int | None = Non
                 else:
                     submit_chain(count, j)
                 _rebuild(problem, done, out, settings)
+        interrupted = False
     finally:
         bar.close()
-        ex.close()
+        ex.close(interrupted)
     result = _rebuild(problem, done, out, settings)
     result.run.update({"wall_time_s": time.perf_counter() - t0, "resumed_points": n_resumed,
                        "workers": "dask" if scheduler is not None else n_workers})

@@ -19,6 +19,7 @@ COMMANDS = [
     "optdesign.commands.curves",
     "optdesign.commands.simulate",
     "optdesign.commands.bench",
+    "optdesign.commands.pareto",
 ]
 
 

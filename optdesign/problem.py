@@ -19,6 +19,7 @@ from .mechanisms import get_mechanism
 SECTION_PARSERS: dict[str, str] = {
     "driveline": "optdesign.driveline.section:parse_section",
     "dynamics": "optdesign.dynamics.section:parse_section",
+    "pareto": "optdesign.pareto.section:parse_section",
 }
 
 TOP_KEYS = {"name", "mechanism", "input_speed", "stroke", "design", "options", "constraints",

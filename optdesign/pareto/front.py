@@ -1,0 +1,113 @@
+"""A swept front as a pandas DataFrame, one row a design, with its non-dominated flags and
+indicators; written as ``pareto.csv`` and ``pareto.json``."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..io import atomic_write_bytes, atomic_write_json
+from .indicators import indicators, non_dominated, objectives
+
+#: leading columns of pareto.csv (shared/DESIGN.md section 3 names the first nine); the
+#: mechanism's own design keys replace l0 .. l3 for other mechanisms
+LEAD = ["phases", "delta", "ratio"]
+TAIL = ["status", "min_transmission_angle_deg", "pin_radius", "ratio_multiplier", "epsilon",
+        "kind", "count_front", "non_dominated", "ipopt_status", "iterations", "time_s"]
+
+
+def frame(records: list[dict], lengths: list[str]):
+    """DataFrame of the grid-point records, sorted by phase count and ratio.
+
+    ``count_front``: non-dominated among the feasible points of its own phase count;
+    ``non_dominated``: non-dominated among the feasible points of every count.
+    """
+    import pandas as pd
+
+    rows = []
+    for r in records:
+        if isinstance(r["key"][1], str):          # the raw end-point solves: copied as points
+            continue
+        row = {k: r.get(k) for k in LEAD + TAIL if k in r}
+        row.update({k: r["design"].get(k) if r["design"] else None for k in lengths})
+        row["index"] = r["key"][1]
+        rows.append(row)
+    df = pd.DataFrame(rows, columns=LEAD + list(lengths) + TAIL + ["index"])
+    df["count_front"] = False
+    df["non_dominated"] = False
+    if len(df):
+        df = df.sort_values(["phases", "index"], kind="stable").reset_index(drop=True)
+        ok = df["status"] == "optimal"
+        f = objectives(df.loc[ok, "delta"], df.loc[ok, "ratio"])
+        df.loc[ok, "non_dominated"] = non_dominated(f)
+        for n, group in df[ok].groupby("phases"):
+            g = objectives(group["delta"], group["ratio"])
+            df.loc[group.index, "count_front"] = non_dominated(g)
+    for col in ("count_front", "non_dominated"):
+        df[col] = df[col].astype(bool)
+    return df
+
+
+@dataclass
+class ParetoResult:
+    """What ``optdesign pareto`` found: the points, their indicators, how the run was made."""
+
+    points: object                        # pandas DataFrame (see :func:`frame`)
+    indicators: dict                      # of the non-dominated set across every count
+    per_count: dict = field(default_factory=dict)     # phases -> indicators of its own front
+    run: dict = field(default_factory=dict)
+    ends: list[dict] = field(default_factory=list)    # the raw end-point solves
+
+    @property
+    def front(self):
+        """The designs non-dominated across every phase count, by ratio."""
+        return self.points[self.points["non_dominated"]].sort_values("ratio")
+
+    @property
+    def knee(self):
+        """The knee (best compromise) row of the overall front, or None."""
+        k = self.indicators.get("knee")
+        return None if k is None else self.points.loc[k]
+
+    def to_dict(self) -> dict:
+        df = self.points.replace({np.nan: None})
+        return {"run": self.run, "indicators": self.indicators,
+                "per_count": {str(k): v for k, v in self.per_count.items()},
+                "knee": None if self.knee is None else _plain(self.knee.to_dict()),
+                "points": [_plain(r) for r in df.to_dict(orient="records")],
+                "ends": self.ends}
+
+
+def _plain(row: dict) -> dict:
+    out = {}
+    for k, v in row.items():
+        if isinstance(v, np.generic):
+            v = v.item()
+        if isinstance(v, float) and not np.isfinite(v):
+            v = None
+        out[k] = v
+    return out
+
+
+def evaluate(points) -> tuple[dict, dict]:
+    """Indicators of the overall front (knee as a row label of ``points``) and per count."""
+    ok = points[points["status"] == "optimal"]
+    overall = indicators(ok["delta"], ok["ratio"])
+    if overall["knee"] is not None:
+        overall["knee"] = int(ok.index[overall["knee"]])
+    per_count = {}
+    for n, group in ok.groupby("phases"):
+        ind = indicators(group["delta"], group["ratio"])
+        if ind["knee"] is not None:
+            ind["knee"] = int(group.index[ind["knee"]])
+        per_count[int(n)] = ind
+    return overall, per_count
+
+
+def write_front(result: ParetoResult, out_dir: str | Path) -> list[Path]:
+    """pareto.csv and pareto.json, each written atomically."""
+    out = Path(out_dir)
+    csv = result.points.drop(columns=["index"]).to_csv(index=False, float_format="%.10g")
+    return [atomic_write_bytes(out / "pareto.csv", csv.encode("utf-8")),
+            atomic_write_json(out / "pareto.json", result.to_dict())]

@@ -1,0 +1,236 @@
+"""The report of a sweep: fronts of every phase count, the knee design's drawing and speed
+curves, the non-dominated designs, the indicators and how the run was made.
+
+Written as ``report.md`` (images beside it as PNG) and ``report.html`` (self-contained: the
+same PNGs embedded as base64). Both are rendered from one list of blocks, so they agree.
+"""
+from __future__ import annotations
+
+import base64
+import html
+import platform
+from datetime import datetime, timezone
+from pathlib import Path
+
+from ..io import atomic_savefig, atomic_write_text
+from .indicators import REFERENCE
+
+MARKERS = "osD^v<>p*h"
+
+
+def plot_fronts(points, ax=None, title: str | None = None):
+    """δ against ratio: each phase count's own front (line), the points it dominates (faint),
+    the overall non-dominated designs (ringed) and the knee (star)."""
+    from ..plots import _pyplot
+    plt = _pyplot()
+    fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(figsize=(7.5, 5))
+    ok = points[points["status"] == "optimal"]
+    for j, (n, g) in enumerate(ok.groupby("phases")):
+        front = g[g["count_front"]].sort_values("ratio")
+        line, = ax.plot(front["ratio"], front["delta"], marker=MARKERS[j % len(MARKERS)],
+                        ms=5, lw=1.4, label=f"n = {n} ({len(front)} points)")
+        rest = g[~g["count_front"]]
+        if len(rest):
+            ax.plot(rest["ratio"], rest["delta"], MARKERS[j % len(MARKERS)], ms=4, alpha=0.3,
+                    color=line.get_color())
+    nd = ok[ok["non_dominated"]]
+    ax.plot(nd["ratio"], nd["delta"], "o", ms=10, mfc="none", mec="black", mew=1.0,
+            label="non-dominated over every n")
+    if "knee" in points.attrs and points.attrs["knee"] is not None:
+        k = points.loc[points.attrs["knee"]]
+        ax.plot(k["ratio"], k["delta"], "*", ms=16, color="crimson", mec="black",
+                label=f"knee (n = {int(k['phases'])})")
+    ax.set_xlabel("ratio i = mean output speed / ω1 (at e = 1)")
+    ax.set_ylabel("ripple δ (exact)")
+    ax.set_title(title or "ripple against ratio, per phase count")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    return fig
+
+
+def run_info(problem, result, problem_path=None, command: str | None = None) -> dict:
+    """Problem file, versions, seeds and times: enough to make the run again."""
+    import casadi
+    import numpy
+    import pandas
+
+    from .. import __version__
+    return {"problem_file": str(problem_path or problem.source),
+            "problem": problem.name, "mechanism": problem.mechanism, "stroke": problem.stroke,
+            "optdesign": __version__, "casadi": casadi.__version__, "numpy": numpy.__version__,
+            "pandas": pandas.__version__, "python": platform.python_version(),
+            "platform": platform.platform(),
+            "seed": problem.solver.seed, "starts": problem.solver.starts,
+            "samples": problem.solver.samples, "points_per_count": result.run.get("points"),
+            "counts": result.run.get("counts"), "workers": result.run.get("workers"),
+            "wall_time_s": round(result.run.get("wall_time_s", float("nan")), 2),
+            "resumed_points": result.run.get("resumed_points", 0),
+            "finished_utc": datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC"),
+            "command": command or ""}
+
+
+def _fmt(v, digits=4):
+    if v is None or v != v:
+        return ""
+    if isinstance(v, float):
+        return f"{v:.{digits}f}"
+    return str(v)
+
+
+def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
+    lengths = list(problem.model.lengths)
+    ind = result.indicators
+    out = [("h1", f"Pareto front: {problem.name}"),
+           ("p", f"{problem.mechanism}, {problem.stroke} stroke, ω1 = {problem.input_speed:g} "
+                 f"rad/s. Least ripple δ ({problem.objective.ripple}) subject to ratio ≥ ε, "
+                 f"ε swept across each phase count's reachable ratio range; every point "
+                 f"re-evaluated by the exact evaluator.")]
+    out.append(("h2", "Fronts"))
+    out.append(("img", "fronts.png", images.get("fronts.png")))
+    out.append(("h2", "Indicators"))
+    out.append(("p", "Objectives δ (minimised) and ratio (maximised), normalised so the ideal "
+                     "point is (0, 0) and the nadir (1, 1) of the front judged; hypervolume "
+                     f"to the reference point {REFERENCE} in that space (at most "
+                     f"{REFERENCE[0] * REFERENCE[1]:.2f}); spacing is Schott's (0 for evenly "
+                     "spaced points); the knee is the point farthest from the chord between "
+                     "the front's two ends, towards the ideal."))
+    rows = [["every n", ind["n_points"], _fmt(ind["hypervolume"]), _fmt(ind["spacing"]),
+             _nadir(ind)]]
+    for n, v in result.per_count.items():
+        rows.append([f"n = {n}", v["n_points"], _fmt(v["hypervolume"]), _fmt(v["spacing"]),
+                     _nadir(v)])
+    out.append(("table", ["front", "non-dominated points", "hypervolume", "spacing",
+                          "ideal / nadir (δ, ratio)"], rows))
+    knee = result.knee
+    if knee is not None:
+        out.append(("h2", "The knee design (best compromise)"))
+        out.append(("p", f"n = {int(knee['phases'])}: " + ", ".join(
+            f"{k} = {knee[k]:.3f} mm" for k in lengths) +
+            f"; δ = {knee['delta']:.5f}, ratio = {knee['ratio']:.5f}, least transmission "
+            f"angle {knee['min_transmission_angle_deg']:.2f}°" +
+            (f", pin radius {knee['pin_radius']:.2f} mm" if knee.get("pin_radius") ==
+             knee.get("pin_radius") and knee.get("pin_radius") is not None else "") +
+            (f", local slope dδ/d ratio = {knee['ratio_multiplier']:.4g}"
+             if knee.get("ratio_multiplier") == knee.get("ratio_multiplier") and
+             knee.get("ratio_multiplier") is not None else "") + "."))
+        out.append(("img", "knee_mechanism.png", images.get("knee_mechanism.png")))
+        out.append(("img", "knee_speeds.png", images.get("knee_speeds.png")))
+    out.append(("h2", "Non-dominated designs (over every phase count)"))
+    cols = ["phases", "delta", "ratio"] + lengths + ["min_transmission_angle_deg",
+                                                       "pin_radius", "ratio_multiplier",
+                                                       "status"]
+    head = ["n", "δ", "ratio"] + [f"{k} [mm]" for k in lengths] + [
+        "μ_min [°]", "pin radius [mm]", "dδ/d ratio", "status"]
+    rows = [[_fmt(r[c], 5 if c in ("delta", "ratio") else 3) if c != "phases" else
+             int(r[c]) for c in cols] for _, r in result.front.iterrows()]
+    out.append(("table", head, rows))
+    failed = result.points[result.points["status"] != "optimal"]
+    if len(failed):
+        out.append(("p", f"{len(failed)} sweep point(s) reached no verified feasible design: "
+                         + "; ".join(f"n = {int(r.phases)}, ε = {r.epsilon:.4f}: {r.status}"
+                                     for r in failed.itertuples())))
+    out.append(("h2", "How the run was made"))
+    out.append(("table", ["", ""], [[k, _fmt(v)] for k, v in info.items()]))
+    return out
+
+
+def _nadir(ind) -> str:
+    if not ind.get("ideal"):
+        return ""
+    i, n = ind["ideal"], ind["nadir"]
+    return f"({i['delta']:.4f}, {i['ratio']:.4f}) / ({n['delta']:.4f}, {n['ratio']:.4f})"
+
+
+def render_md(items) -> str:
+    lines = []
+    for item in items:
+        kind = item[0]
+        if kind == "h1":
+            lines += [f"# {item[1]}", ""]
+        elif kind == "h2":
+            lines += [f"## {item[1]}", ""]
+        elif kind == "p":
+            lines += [item[1], ""]
+        elif kind == "img" and item[2] is not None:
+            lines += [f"![{item[1]}]({item[1]})", ""]
+        elif kind == "table":
+            head, rows = item[1], item[2]
+            lines.append("| " + " | ".join(head) + " |")
+            lines.append("|" + "---|" * len(head))
+            lines += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
+            lines.append("")
+    return "\n".join(lines)
+
+
+def render_html(items) -> str:
+    body = []
+    for item in items:
+        kind = item[0]
+        if kind in ("h1", "h2", "p"):
+            body.append(f"<{kind}>{html.escape(item[1])}</{kind}>")
+        elif kind == "img" and item[2] is not None:
+            data = base64.b64encode(Path(item[2]).read_bytes()).decode("ascii")
+            body.append(f'<img alt="{html.escape(item[1])}" src="data:image/png;base64,{data}">')
+        elif kind == "table":
+            head = "".join(f"<th>{html.escape(str(h))}</th>" for h in item[1])
+            rows = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r)
+                           + "</tr>" for r in item[2])
+            body.append(f"<table><thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table>")
+    style = ("body{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}"
+             "table{border-collapse:collapse;margin:1em 0;font-size:13px}"
+             "td,th{border:1px solid #ccc;padding:3px 7px;text-align:right}"
+             "img{max-width:100%;display:block;margin:1em 0}")
+    return (f"<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>Pareto report"
+            f"</title><style>{style}</style></head><body>\n" + "\n".join(body) +
+            "\n</body></html>\n")
+
+
+def write_report(result, problem, out_dir, problem_path=None,
+                 command: str | None = None) -> list[Path]:
+    """fronts.png, knee_mechanism.png, knee_speeds.png, report.md and report.html."""
+    from ..design import Design
+    from ..plots import _pyplot, plot_mechanism, plot_speeds
+    plt = _pyplot()
+    out = Path(out_dir)
+    images = {}
+    points = result.points
+    points.attrs["knee"] = result.indicators.get("knee")
+    fig = plot_fronts(points, title=f"{problem.name}: ripple against ratio")
+    images["fronts.png"] = atomic_savefig(fig, out / "fronts.png")
+    plt.close(fig)
+    knee = result.knee
+    if knee is not None:
+        values = {k: float(knee[k]) for k in problem.model.lengths}
+        values[problem.model.count_variable] = int(knee["phases"])
+        design = Design.from_problem(problem, values)
+        fig = plot_mechanism(design, title=f"knee design, n = {int(knee['phases'])}")
+        images["knee_mechanism.png"] = atomic_savefig(fig, out / "knee_mechanism.png")
+        plt.close(fig)
+        fig = plot_speeds(design, problem.stroke, problem.input_speed,
+                          title=f"knee design: δ = {knee['delta']:.4f}, "
+                                f"ratio = {knee['ratio']:.4f}")
+        images["knee_speeds.png"] = atomic_savefig(fig, out / "knee_speeds.png")
+        plt.close(fig)
+    info = run_info(problem, result, problem_path, command)
+    items = blocks(result, problem, info, images)
+    return list(images.values()) + [
+        atomic_write_text(out / "report.md", render_md(items)),
+        atomic_write_text(out / "report.html", render_html(items))]
+
+
+def summary_text(result) -> str:
+    """The indicators and the knee, printed by ``optdesign pareto``."""
+    ind = result.indicators
+    lines = [f"{len(result.points)} points, {int((result.points['status'] == 'optimal').sum())}"
+             f" verified feasible; {ind['n_points']} non-dominated over every phase count"]
+    for n, v in result.per_count.items():
+        lines.append(f"  n = {n}: {v['n_points']} non-dominated, hypervolume "
+                     f"{v['hypervolume']:.4f}, spacing {_fmt(v['spacing'])}")
+    if ind["n_points"]:
+        lines.append(f"hypervolume {ind['hypervolume']:.4f} (normalised: ideal (0, 0), nadir "
+                     f"(1, 1), reference {REFERENCE}); spacing {_fmt(ind['spacing'])}")
+    knee = result.knee
+    if knee is not None:
+        lines.append(f"knee: n = {int(knee['phases'])}, δ = {knee['delta']:.5f}, ratio = "
+                     f"{knee['ratio']:.5f}")
+    return "\n".join(lines)

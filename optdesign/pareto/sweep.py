@@ -1,0 +1,251 @@
+"""The ε-constraint sweep of ripple against ratio (shared/DESIGN.md section 2, "Pareto").
+
+For each admissible phase count: the two ends of the front (least ripple; largest ratio), then
+K ε values evenly across the ratio range between them; at each, least δ subject to
+ratio >= ε. The interior points are solved in *chains* that walk away from an end, each point
+warm-started from its neighbour's design (the same NLP re-solved with a new ε parameter), with
+the other end and then the multi-start designs as fallbacks where a point fails. Chains of
+every count run in parallel on local processes or on a Dask cluster; each finished point is
+appended to ``points.jsonl`` at once, so an interrupted sweep resumes where it stopped.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import sys
+import time
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor
+from concurrent.futures import wait as _wait
+from pathlib import Path
+
+import numpy as np
+
+from . import worker
+from .front import ParetoResult, evaluate, frame, write_front
+from .section import DEFAULT_POINTS, ParetoSection
+from .store import Journal
+
+ENDS = ("least_ripple", "largest_ratio")
+
+
+def grid(section: ParetoSection, ends: dict, points: int) -> np.ndarray:
+    """The ε values of one phase count: ``points`` evenly over the reachable ratio range,
+    clipped to the section's ratio_lower/ratio_upper (empty when the span misses it)."""
+    lo, hi = ends["least_ripple"]["ratio"], ends["largest_ratio"]["ratio"]
+    if hi is None or hi < lo:
+        hi = lo
+    a = max(lo, section.ratio_lower) if section.ratio_lower is not None else lo
+    b = min(hi, section.ratio_upper) if section.ratio_upper is not None else hi
+    if b < a:
+        return np.zeros(0)
+    if b - a <= 1e-6 * max(1.0, b):
+        return np.array([a])
+    return np.linspace(a, b, points)
+
+
+class _Inline:
+    """Runs each task at submission, in this process (``workers=1``)."""
+
+    def submit(self, fn, *args):
+        fut = Future()
+        try:
+            fut.set_result(fn(*args))
+        except BaseException as exc:        # surfaces in .result(), like a pool's future
+            fut.set_exception(exc)
+        return fut
+
+    def wait_any(self, futures):
+        return {f for f in futures if f.done()}
+
+    def close(self, interrupted: bool = False):
+        pass
+
+
+class _Pool:
+    """Local worker processes. Forked where the platform can (the parent holds no built NLP,
+    and a forked worker needs no ``if __name__ == "__main__"`` guard in the caller's script)."""
+
+    def __init__(self, workers: int):
+        import multiprocessing as mp
+        method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
+        self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context(method))
+
+    def submit(self, fn, *args):
+        return self.pool.submit(fn, *args)
+
+    def wait_any(self, futures):
+        return _wait(futures, return_when=FIRST_COMPLETED).done
+
+    def close(self, interrupted: bool = False):
+        if interrupted:         # Ctrl-C or an error: do not wait for the points in flight
+            for proc in list(getattr(self.pool, "_processes", {}).values()):
+                proc.terminate()
+        self.pool.shutdown(wait=not interrupted, cancel_futures=True)
+
+
+class _Dask:
+    """The same tasks on a Dask distributed scheduler (``--scheduler ADDRESS``)."""
+
+    def __init__(self, address):
+        from distributed import Client
+        self.own = isinstance(address, str)
+        self.client = Client(address) if self.own else address
+
+    def submit(self, fn, *args):
+        return self.client.submit(fn, *args, pure=False)
+
+    def wait_any(self, futures):
+        from distributed import wait
+        return wait(list(futures), return_when="FIRST_COMPLETED").done
+
+    def close(self, interrupted: bool = False):
+        if self.own:
+            self.client.close()
+
+
+def _executor(workers: int | None, scheduler):
+    if scheduler is not None:
+        return _Dask(scheduler)
+    workers = workers or os.cpu_count() or 1
+    return _Inline() if workers == 1 else _Pool(workers)
+
+
+def _chains(indices: list[int], eps: np.ndarray, n_chains: int) -> list[list[int]]:
+    """Contiguous blocks of the interior indices, each ordered away from its nearer end."""
+    if not indices:
+        return []
+    blocks = np.array_split(np.array(indices), min(n_chains, len(indices)))
+    mid = 0.5 * (eps[0] + eps[-1])
+    out = []
+    for b in blocks:
+        b = [int(i) for i in b]
+        out.append(b if eps[b].mean() <= mid else b[::-1])
+    return out
+
+
+def sweep(problem, out_dir, points: int | None = None, workers: int | None = None,
+          resume: bool = False, scheduler=None, progress: bool = True) -> ParetoResult:
+    """Sweep the front of every admissible phase count; write pareto.csv/json to ``out_dir``.
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem; its ``pareto:`` section (if any) sets points, ratio span and counts.
+    out_dir : path
+        Folder of ``points.jsonl`` (the journal), ``pareto.csv`` and ``pareto.json``.
+    points : int, optional
+        ε values per phase count (end points included); overrides ``pareto.points``.
+    workers : int, optional
+        Local worker processes (default: every core; 1 runs in this process).
+    resume : bool
+        Keep the journal's finished points and solve only the rest.
+    scheduler : str or distributed.Client, optional
+        Run the tasks on this Dask cluster instead of local processes.
+    """
+    t0 = time.perf_counter()
+    section = problem.sections.get("pareto") or ParetoSection(source=problem.source)
+    n_points = points or section.points or DEFAULT_POINTS
+    counts = list(section.counts or problem.counts())
+    settings = {"problem": problem.source,
+                "problem_sha256": hashlib.sha256(repr(problem).encode()).hexdigest(),
+                "points": n_points, "counts": counts,
+                "ratio_lower": section.ratio_lower, "ratio_upper": section.ratio_upper}
+    out = Path(out_dir)
+    journal = Journal(out / "points.jsonl")
+    done = {tuple(r["key"]): r for r in journal.start(settings, resume)}
+    n_resumed = len(done)
+    ex = _executor(workers, scheduler)
+    n_workers = workers or os.cpu_count() or 1
+    n_chains = max(2, -(-n_workers // max(1, len(counts))))
+    from tqdm import tqdm
+    bar = tqdm(total=len(counts) * (n_points + 2), initial=n_resumed, desc="pareto",
+               unit="point", file=sys.stderr, disable=None if progress else True,
+               dynamic_ncols=True)
+    running: dict = {}            # future -> (count, chain or None)
+    chains: dict = {}             # (count, j) -> {"order": [...], "pos": int, "start": values}
+
+    def finish(rec):
+        rec["finished_s"] = time.perf_counter() - t0      # since this run started
+        done[tuple(rec["key"])] = rec
+        journal.append(rec)
+        bar.update(1)
+
+    def submit_chain(count, j):
+        c = chains[(count, j)]
+        while c["pos"] < len(c["order"]) and (count, c["order"][c["pos"]]) in done:
+            prev = done[(count, c["order"][c["pos"]])]
+            if prev["feasible"]:
+                c["start"] = prev["design"]
+            c["pos"] += 1
+        if c["pos"] >= len(c["order"]):
+            return
+        i = c["order"][c["pos"]]
+        fallbacks = [e["design"] for e in c["ends"] if e["design"] != c["start"]]
+        fut = ex.submit(worker.solve_point, problem, count, i, float(c["eps"][i]),
+                        c["start"], fallbacks)
+        running[fut] = (count, j)
+
+    def open_count(count):
+        ends = {k: done[(count, k)] for k in ENDS}
+        if not ends["least_ripple"]["feasible"]:
+            return
+        eps = grid(section, ends, n_points)
+        if len(eps) == 0:
+            return
+        lo_end, hi_end = ends["least_ripple"], ends["largest_ratio"]
+        interior = list(range(len(eps)))
+        if eps[0] == lo_end["ratio"] and (count, 0) not in done:
+            finish(worker.copy_end(lo_end, 0))
+        if eps[0] == lo_end["ratio"]:
+            interior.remove(0)
+        last = len(eps) - 1
+        if last > 0 and hi_end["feasible"] and eps[-1] == hi_end["ratio"]:
+            if (count, last) not in done:
+                finish(worker.copy_end(hi_end, last))
+            interior.remove(last)
+        ok_ends = [e for e in (lo_end, hi_end) if e["feasible"]]
+        for j, order in enumerate(_chains(interior, eps, n_chains)):
+            up = order[0] <= order[-1]
+            start = lo_end if up or not hi_end["feasible"] else hi_end
+            chains[(count, j)] = {"order": order, "pos": 0, "start": start["design"],
+                                  "eps": eps, "ends": ok_ends}
+            submit_chain(count, j)
+
+    interrupted = True
+    try:
+        for n in counts:
+            missing = [k for k in ENDS if (n, k) not in done]
+            for k in missing:
+                running[ex.submit(worker.solve_end, problem, n, k)] = (n, None)
+            if not missing:
+                open_count(n)
+        while running:
+            for fut in ex.wait_any(list(running)):
+                count, j = running.pop(fut)
+                finish(fut.result())
+                if j is None:
+                    if all((count, k) in done for k in ENDS):
+                        open_count(count)
+                else:
+                    submit_chain(count, j)
+                _rebuild(problem, done, out, settings)
+        interrupted = False
+    finally:
+        bar.close()
+        ex.close(interrupted)
+    result = _rebuild(problem, done, out, settings)
+    result.run.update({"wall_time_s": time.perf_counter() - t0, "resumed_points": n_resumed,
+                       "workers": "dask" if scheduler is not None else n_workers})
+    write_front(result, out)
+    return result
+
+
+def _rebuild(problem, done: dict, out: Path, settings: dict) -> ParetoResult:
+    """The front from every finished record, pareto.csv/json rewritten atomically."""
+    records = list(done.values())
+    points = frame(records, list(problem.model.lengths))
+    overall, per_count = evaluate(points)
+    ends = [r for r in records if isinstance(r["key"][1], str)]
+    result = ParetoResult(points, overall, per_count, run=dict(settings), ends=ends)
+    write_front(result, out)
+    return result

@@ -1,0 +1,67 @@
+"""An interrupted sweep (the process killed) resumes without losing or recomputing a point."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pandas as pd
+import yaml
+
+from optdesign.cli import main
+from tests.conftest import ROOT
+
+from .conftest import small
+
+
+def _records(path):
+    recs = []
+    for line in path.read_text().splitlines():
+        try:
+            r = json.loads(line)
+        except json.JSONDecodeError:
+            continue
+        if r["key"] != "run":
+            recs.append(r)
+    return recs
+
+
+def test_killed_sweep_resumes_without_loss_or_recomputation(tmp_path):
+    problem = tmp_path / "small.yaml"
+    problem.write_text(yaml.safe_dump(small(points=5)))
+    out = tmp_path / "out"
+    journal = out / "points.jsonl"
+    env = os.environ | {"PYTHONPATH": str(ROOT)}
+    proc = subprocess.Popen([sys.executable, "-m", "optdesign", "pareto", str(problem),
+                             "--out", str(out), "--workers", "1", "--no-report"],
+                            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        # the two end solves and the end copies come first; kill once a sweep point is in
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            if journal.exists() and any(r["kind"] == "sweep" for r in _records(journal)):
+                break
+            if proc.poll() is not None:
+                break
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    before = _records(journal)
+    keys_before = [tuple(r["key"]) for r in before]
+    assert any(r["kind"] == "sweep" for r in before), "killed before any sweep point"
+    assert len(keys_before) < 2 + 5, "the sweep finished before it could be killed"
+
+    assert main(["pareto", str(problem), "--out", str(out), "--resume", "--workers", "1",
+                 "--no-report"]) == 0
+    after = _records(journal)
+    keys_after = [tuple(r["key"]) for r in after]
+    assert after[:len(before)] == before                      # nothing lost or rewritten
+    assert len(set(keys_after)) == len(keys_after)            # nothing computed twice
+    assert set(keys_after) == {(4, "least_ripple"), (4, "largest_ratio")} | {
+        (4, i) for i in range(5)}
+    df = pd.read_csv(out / "pareto.csv")
+    assert len(df) == 5 and (df["status"] == "optimal").all()

@@ -71,7 +71,7 @@ def run_info(problem, result, problem_path=None, command: str | None = None) -> 
 
 def _fmt(v, digits=4):
     if v is None or v != v:
-        return ""
+        return "n/a"
     if isinstance(v, float):
         return f"{v:.{digits}f}"
     return str(v)
@@ -225,7 +225,9 @@ def summary_text(result) -> str:
              f" verified feasible; {ind['n_points']} non-dominated over every phase count"]
     for n, v in result.per_count.items():
         lines.append(f"  n = {n}: {v['n_points']} non-dominated, hypervolume "
-                     f"{v['hypervolume']:.4f}, spacing {_fmt(v['spacing'])}")
+                     f"{v['hypervolume']:.4f}, spacing {_fmt(v['spacing'])}"
+                     + (" (one design: no trade-off, the normalisation is degenerate)"
+                        if v["n_points"] == 1 else ""))
     if ind["n_points"]:
         lines.append(f"hypervolume {ind['hypervolume']:.4f} (normalised: ideal (0, 0), nadir "
                      f"(1, 1), reference {REFERENCE}); spacing {_fmt(ind['spacing'])}")

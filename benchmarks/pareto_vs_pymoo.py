@@ -108,6 +108,11 @@ def hv(f, ideal, nadir) -> float:
     return hypervolume_2d(z)
 
 
+def _journal_records(folder):
+    from optdesign.pareto.store import Journal
+    return Journal(Path(folder) / "points.jsonl").read()[1]
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("problem", nargs="?", default="problems/pareto_fourbar.yaml")
@@ -128,7 +133,7 @@ def main(argv=None) -> int:
         ours_json = json.loads((out / "ours" / "pareto.json").read_text())
     wall = ours_json["run"]["wall_time_s"]
     pts = [r for r in ours_json["points"] if r["status"] == "optimal"]
-    finished = {tuple(r["key"]): r.get("finished_s") for r in _journal(args.ours or
+    finished = {tuple(r["key"]): r.get("finished_s") for r in _journal_records(args.ours or
                                                                          out / "ours")}
     for r in pts:
         r["finished_s"] = finished.get((r["phases"], r["index"])) or wall
@@ -179,17 +184,6 @@ def main(argv=None) -> int:
     return 0
 
 
-def _journal(folder):
-    path = Path(folder) / "points.jsonl"
-    recs = []
-    for line in path.read_text().splitlines():
-        try:
-            r = json.loads(line)
-        except json.JSONDecodeError:
-            continue
-        if r.get("key") != "run":
-            recs.append(r)
-    return recs
 
 
 def _figures(out, ours_curve, nsga_curve, f_ours, f_nsga, wall, factor):

@@ -1,5 +1,4 @@
 """An interrupted sweep (the process killed) resumes without losing or recomputing a point."""
-import json
 import os
 import signal
 import subprocess
@@ -10,21 +9,14 @@ import pandas as pd
 import yaml
 
 from optdesign.cli import main
+from optdesign.pareto.store import Journal
 from tests.conftest import ROOT
 
 from .conftest import small
 
 
 def _records(path):
-    recs = []
-    for line in path.read_text().splitlines():
-        try:
-            r = json.loads(line)
-        except json.JSONDecodeError:
-            continue
-        if r["key"] != "run":
-            recs.append(r)
-    return recs
+    return Journal(path).read()[1]
 
 
 def test_killed_sweep_resumes_without_loss_or_recomputation(tmp_path):

@@ -266,8 +266,8 @@ def _sci(v) -> str:
 
 def plot_accuracy(rows: list[dict], ax=None, title: str | None = None):
     """δ error against run time, log-log, one line per method (and per ρ); returns the figure."""
-    from .plots import _pyplot
-    plt = _pyplot()
+    from .plots import pyplot
+    plt = pyplot()
     fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(figsize=(8, 5.2))
     floor = 1e-16
     groups: dict[tuple, list[dict]] = {}

@@ -64,9 +64,9 @@ def plot_curves(curves: Curves, axes=None, title: str = ""):
 
     ``axes``: an existing 3×2 array of axes, or None for a new figure.
     """
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from .plots import pyplot
+
+    plt = pyplot()
 
     if axes is None:
         fig, axes = plt.subplots(3, 2, figsize=(11, 8), sharex=True, constrained_layout=True)

@@ -11,7 +11,8 @@ from .envelope import output_envelope
 from .mechanisms import STROKE_SIGNS
 
 
-def _pyplot():
+def pyplot():
+    """matplotlib.pyplot on the Agg backend (files only, no display), imported on first use."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -21,7 +22,7 @@ def _pyplot():
 def plot_speeds(design, stroke: str, input_speed: float, eccentricity: float = 1.0,
                 ax=None, n_samples: int = 1441, title: str | None = None):
     """Each rocker's driving speed s·ω_k over the crank angle, and the output envelope."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(figsize=(8, 4.5))
     phi = np.linspace(0, 2 * np.pi, n_samples)
     dtheta = design.sample(phi, eccentricity)["dtheta"]
@@ -51,7 +52,7 @@ def plot_speeds(design, stroke: str, input_speed: float, eccentricity: float = 1
 def plot_mechanism(design, angles_deg=(0, 90, 180, 270), eccentricity: float = 1.0,
                    axes=None, title: str | None = None):
     """The linkage drawn at a few crank angles (one panel each), to scale, in mm."""
-    plt = _pyplot()
+    plt = pyplot()
     if axes is None:
         fig, axes = plt.subplots(1, len(angles_deg), figsize=(3.6 * len(angles_deg), 3.8))
     axes = np.atleast_1d(axes)

@@ -9,10 +9,9 @@ import numpy as np
 
 
 def _axes(ax, figsize):  # noqa: D401 - one axes, made if not given
-    import matplotlib
+    from ..plots import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     if ax is None:
         fig, ax = plt.subplots(figsize=figsize, constrained_layout=True)
@@ -41,14 +40,11 @@ def plot_angles(result, ax=None):
     below; on a given ``ax`` everything shares it, as in the paper's figure.
     """
     if ax is None:
-        import matplotlib
+        from ..plots import pyplot
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 5.6), sharex=True,
-                                          constrained_layout=True,
-                                          gridspec_kw={"height_ratios": [3, 2]})
+        fig, (top, bottom) = pyplot().subplots(2, 1, figsize=(7.5, 5.6), sharex=True,
+                                               constrained_layout=True,
+                                               gridspec_kw={"height_ratios": [3, 2]})
     else:
         fig, top, bottom = ax.figure, ax, ax
     tr = result.trace

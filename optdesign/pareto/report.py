@@ -21,8 +21,8 @@ MARKERS = "osD^v<>p*h"
 def plot_fronts(points, ax=None, title: str | None = None):
     """δ against ratio: each phase count's own front (line), the points it dominates (faint),
     the overall non-dominated designs (ringed) and the knee (star)."""
-    from ..plots import _pyplot
-    plt = _pyplot()
+    from ..plots import pyplot
+    plt = pyplot()
     fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(figsize=(7.5, 5))
     ok = points[points["status"] == "optimal"]
     for j, (n, g) in enumerate(ok.groupby("phases")):
@@ -189,8 +189,8 @@ def write_report(result, problem, out_dir, problem_path=None,
                  command: str | None = None) -> list[Path]:
     """fronts.png, knee_mechanism.png, knee_speeds.png, report.md and report.html."""
     from ..design import Design
-    from ..plots import _pyplot, plot_mechanism, plot_speeds
-    plt = _pyplot()
+    from ..plots import pyplot, plot_mechanism, plot_speeds
+    plt = pyplot()
     out = Path(out_dir)
     images = {}
     points = result.points

@@ -126,8 +126,9 @@ def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
                            mult, t0, iterations, tries, rec.ipopt_status)
         if tries >= 2 + max(1, problem.solver.starts):
             break
-    status = "infeasible" if last is not None and (
-        last.ipopt_status == "Infeasible_Problem_Detected" or last.note) else "failed"
+    # as in solve.driver: infeasible only on IPOPT's word, not for running out of iterations
+    status = "infeasible" if last is not None and \
+        last.ipopt_status == "Infeasible_Problem_Detected" else "failed"
     return _record(problem, count, index, "sweep", epsilon, None, None, status, None, t0,
                    iterations, tries, last.ipopt_status if last else "",
                    last.note if last else note)

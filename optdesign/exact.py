@@ -73,7 +73,9 @@ def exact_figures(design, stroke: str, input_speed: float, eccentricity: float =
     curves = _Curves(design, stroke, eccentricity)
     breaks = sorted({float(b) % TWO_PI for b in design.breakpoints(eccentricity)})
     phi = np.union1d(np.linspace(0.0, TWO_PI, n_grid, endpoint=False), breaks)
-    f, df, theta = curves.grid(phi)
+    sampled = design.sample(phi, eccentricity)        # one pass: speeds and cos μ
+    f, df = curves.stack(sampled)
+    theta = sampled["theta"]
     runs = _runs(curves, phi, f)
     values = [f.max(axis=0).clip(min=0.0)]               # grid values: never beyond the truth
     for run in runs:
@@ -81,7 +83,7 @@ def exact_figures(design, stroke: str, input_speed: float, eccentricity: float =
         values.append(_envelope_at(curves, np.array([run.start, run.end])))
     for b in breaks:                                      # one-sided limits at jumps of f
         values.append(_envelope_at(curves, np.array([b - 1e-10, b + 1e-10])))
-    for b in toggles(design, eccentricity, phi):
+    for b in toggles(design, eccentricity, phi, sampled["cos_mu"]):
         h = TOGGLE_STEP
         near = _envelope_at(curves, np.array([b - 2 * h, b - h, b + h, b + 2 * h]))
         values.append(np.array([2 * near[1] - near[0], 2 * near[2] - near[3]]))
@@ -93,14 +95,16 @@ def exact_figures(design, stroke: str, input_speed: float, eccentricity: float =
     return figures, runs
 
 
-def toggles(design, eccentricity: float, phi: np.ndarray) -> list[float]:
+def toggles(design, eccentricity: float, phi: np.ndarray,
+            cos_mu: np.ndarray | None = None) -> list[float]:
     """Crank angles where a chain reaches a toggle, |cos μ| = 1 at a local peak.
 
     A linkage at the edge of assembly, or at the Grashof limit s + l = p + q, folds flat there
     without jamming: the half-chord of the circle intersection goes as |φ - φ0|, so the
     rocker speed jumps.
     """
-    return [x for _, x, c in design.cos_peaks(phi, eccentricity) if c >= 1.0 - TOGGLE_TOL]
+    return [x for _, x, c in design.cos_peaks(phi, eccentricity, cos_mu)
+            if c >= 1.0 - TOGGLE_TOL]
 
 
 def _envelope_at(curves: _Curves, phi: np.ndarray) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""Error against run time of every evaluator (issue 5): the table and figure of docs/accuracy.md.
+"""Error against run time of every evaluator: the table and figure of docs/accuracy.md.
 
 Run from the repository root (a few minutes on 2 cores; the 2·10^6-sample cross-check alone
 takes ~40 s):

@@ -1,6 +1,6 @@
 """Can any reading of Sharkov & Kalinin 2022 reproduce BOTH strokes of its table?
 
-The paper (shared/seeds/000_*) gives, for l0=225, l1=20, l2=225, l2'=100, l3=56 mm, n=6:
+The paper (its results section; docs/papers.md, section 1) gives, for l0=225, l1=20, l2=225, l2'=100, l3=56 mm, n=6:
     forward  ω_max 39.8  ω_min 27.2  ω_cp 33.5  δ 0.376
     reverse  ω_max 44.1  ω_min 29.5  ω_cp 36.8  δ 0.397
 (ω1 is not stated; optdesign uses 97 rad/s, which fits the forward stroke.)

@@ -1,6 +1,6 @@
 """The ``optdesign`` command: parses arguments, calls the library, maps outcomes to exit codes.
 
-Exit codes (shared/DESIGN.md section 3): 0 success; 1 solved but infeasible or failed (the
+Exit codes (docs/contract.md): 0 success; 1 solved but infeasible or failed (the
 result is still written); 2 bad input or usage, one line on stderr naming file and key.
 """
 from __future__ import annotations

@@ -3,7 +3,7 @@
 The analogue of a speed is the speed per unit crank speed, dθ/dφ (Vergov's Aω7, eq. 8), that of
 an acceleration d²θ/dφ² (both from the mechanism's ``casadi.Function``, by algorithmic
 differentiation). Besides every output member θ_k, the freewheels' output of the chosen stroke:
-Φ' = max(0, max_k s·dθ_k/dφ) (shared/DESIGN.md 1.1), Φ'' = s·d²θ_k/dφ² of the member driving
+Φ' = max(0, max_k s·dθ_k/dφ) (docs/formulation.md), Φ'' = s·d²θ_k/dφ² of the member driving
 at that angle (0 while every freewheel overruns) and Φ = ∫ Φ' dφ from φ = 0. For the pulse
 reducer Φ is the paper's position function, eqs. (1)-(2).
 

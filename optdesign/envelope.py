@@ -1,4 +1,4 @@
-"""The freewheel output and its ripple (shared/DESIGN.md 1.1), on samples of the crank angle.
+"""The freewheel output and its ripple (docs/formulation.md), on samples of the crank angle.
 
 With ideal freewheels the output turns at the speed of the fastest rocker in the driving
 direction: ω_out(φ) = max(0, max_k s·ω_k(φ)), s = +1 forward stroke, -1 reverse stroke (both

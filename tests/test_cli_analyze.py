@@ -21,8 +21,8 @@ def test_analyze_json_contract(capsys):
         assert keys <= set(stroke)
     fwd = out["strokes"]["forward"]
     assert fwd["delta"] == pytest.approx(0.376, abs=5e-4)        # paper, rounded to 0.001
-    # Chain 3's |cos μ| peaks at 0.5487: min(μ, 180° - μ) = acos 0.5487 = 56.72° (issue 6 fixed
-    # the formula, which gave the pressure angle 90° - 68.39° = 21.61° of chain 6 instead).
+    # Chain 3's |cos μ| peaks at 0.5487: min(μ, 180° - μ) = acos 0.5487 = 56.72° (not the
+    # pressure angle 90° - 68.39° = 21.61° of chain 6, which an earlier formula gave).
     assert out["min_transmission_angle_deg"] == pytest.approx(56.72, abs=0.01)
     assert [r["eccentricity"] for r in out["regulation"]] == [1.0, 0.5, 0.25]
 

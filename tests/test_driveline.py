@@ -1,4 +1,4 @@
-"""The flexible cardan shaft (shared/seeds/004_*, eqs. 6-18) and its ``driveline:`` section."""
+"""The flexible cardan shaft (Vestnik DGTU 2017, no. 2(89), eqs. 6-18) and its ``driveline:`` section."""
 from __future__ import annotations
 
 import copy

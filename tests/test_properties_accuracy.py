@@ -1,4 +1,4 @@
-"""Property tests over random assembling designs (issue 5): the exact evaluator agrees with a
+"""Property tests over random assembling designs: the exact evaluator agrees with a
 fine-sampled one within the sampled error bound, δ >= 0, the envelope is >= every rocker, and
 nothing depends on the unit of length."""
 import numpy as np

@@ -1,6 +1,6 @@
 """The output driveline: imbalance and critical speed of a flexible cardan shaft.
 
-Model of the paper in ``shared/seeds/004_*`` (eqs. 6-18; shared/DESIGN.md 1.4), loaded only
+Model of Vestnik DGTU 2017, no. 2(89), eqs. 6-18 (docs/papers.md, section 4), loaded only
 when a problem file has a ``driveline:`` section:
 
 - :mod:`optdesign.driveline.model`: the formulas, pure numpy functions in SI units;

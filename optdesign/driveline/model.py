@@ -1,7 +1,7 @@
 """Imbalance of a flexible (non-rigid) cardan shaft: the paper's eqs. 6-18, in SI units.
 
-Source: the paper in ``shared/seeds/004_*`` (Vestnik DGTU 2017, no. 2(89), pp. 23-30;
-shared/DESIGN.md 1.4). The shaft is a uniform tube simply supported at its two joints, a
+Source: Vestnik DGTU 2017, no. 2(89), pp. 23-30 (citation and readings: docs/papers.md,
+section 4). The shaft is a uniform tube simply supported at its two joints, a
 distance l apart (assumption 3 of the paper), of mass m = m'·l. Its axis is initially bent
 along the first bending mode with a mid-span deflection y0_max (eq. 11); correction planes 1-1
 and 2-2 lie at A and C from supports I and II.

@@ -1,4 +1,4 @@
-"""Drive dynamics with compliant freewheels (Ambartsumyants & Subbotina 2015, DESIGN.md 1.3).
+"""Drive dynamics with compliant freewheels (Ambartsumyants & Subbotina 2015, eqs. 3-4).
 
 ``section`` reads the ``dynamics:`` key of a problem file, ``model`` holds the equations of
 motion, ``integrator`` the event-driven stiff integration, ``steady`` the turn-by-turn search

@@ -1,7 +1,7 @@
 """The ``dynamics:`` section of a problem file, read strictly (Ambartsumyants & Subbotina 2015).
 
 It is parsed only when present, and it has no ``analyze`` method: the drive dynamics run under
-``optdesign simulate`` alone (shared/DESIGN.md section 2, "no dynamics outside simulate").
+``optdesign simulate`` alone (docs/formulation.md, "What a problem builds").
 
 Keys (SI units, as in the paper)::
 

@@ -1,7 +1,7 @@
 """Planar geometry in CasADi symbols: the circle-circle intersection every joint of a linkage is.
 
 Written with atan2 and the discriminant instead of arccos, whose derivative blows up at ±1
-(shared/DESIGN.md 1.1). The assembly branch is an explicit ±1, kept over the whole turn.
+(docs/formulation.md). The assembly branch is an explicit ±1, kept over the whole turn.
 """
 from __future__ import annotations
 

@@ -10,7 +10,7 @@ import numpy as np
 from ..io import atomic_write_bytes, atomic_write_json
 from .indicators import indicators, non_dominated, objectives
 
-#: leading columns of pareto.csv (shared/DESIGN.md section 3 names the first nine); the
+#: leading columns of pareto.csv (docs/contract.md names the first nine); the
 #: mechanism's own design keys replace l0 .. l3 for other mechanisms
 LEAD = ["phases", "delta", "ratio"]
 TAIL = ["status", "min_transmission_angle_deg", "pin_radius", "ratio_multiplier", "epsilon",

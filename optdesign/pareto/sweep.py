@@ -1,4 +1,4 @@
-"""The ε-constraint sweep of ripple against ratio (shared/DESIGN.md section 2, "Pareto").
+"""The ε-constraint sweep of ripple against ratio (docs/formulation.md, "The Pareto front").
 
 For each admissible phase count: the two ends of the front (least ripple; largest ratio), then
 K ε values evenly across the ratio range between them; at each, least δ subject to

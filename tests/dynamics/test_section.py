@@ -89,7 +89,7 @@ def test_bad_cycles_override(capsys):
 
 
 def test_no_dynamics_under_analyze(write_problem, capsys):
-    """The section parses, but analyze neither runs nor reports it (DESIGN.md section 2)."""
+    """The section parses, but analyze neither runs nor reports it: dynamics run under simulate only."""
     problem = load_problem(problem_with(write_problem))
     section = problem.sections["dynamics"]
     assert not hasattr(section, "analyze")

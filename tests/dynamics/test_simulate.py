@@ -99,7 +99,7 @@ def test_stiffness_and_inertia_corners(stiffness, inertia, damping):
 # ------------------------------------------------------------------ rigid limit
 def test_rigid_limit_approaches_kinematic_ripple():
     """λ → ∞ with a light output (I2 = 1e-4, so the load stops any overrun): the dynamic
-    ripple tends to the kinematic δ of `analyze` (0.3764, DESIGN.md 1.1). Observed: 0.04 % off
+    ripple tends to the kinematic δ of `analyze` (0.3764, the paper's design). Observed: 0.04 % off
     at λ = 1e7, 5.8 % at λ = 1e4; tolerance 0.2 % at 1e7."""
     from optdesign.analysis import analyze
 

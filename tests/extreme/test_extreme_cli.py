@@ -1,4 +1,4 @@
-"""Extreme cases through the CLI: exit codes and one-line errors (issue 5, docs/accuracy.md)."""
+"""Extreme cases through the CLI: exit codes and one-line errors (docs/accuracy.md)."""
 import json
 
 import pytest

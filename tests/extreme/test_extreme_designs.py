@@ -1,5 +1,5 @@
 """Extreme designs through the library: each gives a correct finite answer or a clear error,
-never NaN, inf, a hang or a traceback (issue 5; the list and the behaviour of each case is in
+never NaN, inf, a hang or a traceback (the list and the behaviour of each case is in
 docs/accuracy.md).
 
 "Correct" is checked against the fine-sampled evaluator (2^14..2^16 crank samples) whose error

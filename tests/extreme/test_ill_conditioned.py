@@ -1,6 +1,6 @@
-"""The solver on ill-conditioned problems (issue 5): IPOPT converges on the scaled variables
-(each free length divided by its upper bound, optdesign/solve/nlp.py) or fails clearly; every
-returned optimum is re-verified, never a silent wrong one."""
+"""The solver on ill-conditioned problems: IPOPT converges on the scaled variables (each free
+length divided by the geometric mean of its bounds, optdesign/solve/nlp.py) or fails clearly;
+every returned optimum is re-verified, never a silent wrong one."""
 import pytest
 import yaml
 

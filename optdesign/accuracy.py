@@ -1,6 +1,6 @@
 """Error against run time of every evaluator of the output envelope (``optdesign bench accuracy``).
 
-Four ways to get δ, the ratio and ω_min of one design (shared/DESIGN.md 1.1 and section 2):
+Four ways to get δ, the ratio and ω_min of one design (docs/formulation.md):
 
 * ``sampled``: :func:`optdesign.envelope.sampled_figures` at N equally spaced crank angles;
 * ``exact``: :func:`optdesign.exact.exact_figures` (crossings and stationary points by Brent),
@@ -143,7 +143,7 @@ def surrogate_figures(problem, values, samples: int, smoothing: float):
     """The NLP's view of one fixed design: (StrokeFigures at e = 1, inner solve time, time of
     one evaluation of the NLP's constraints and their Jacobian, IPOPT status)."""
     from .solve.driver import PhaseSolver
-    from .solve.verify import verify
+    from .solve.verify import start_guess
 
     fixed = problem.with_values(values)
     fixed = replace(fixed, solver=replace(problem.solver, samples=samples, smoothing=smoothing),
@@ -151,23 +151,25 @@ def surrogate_figures(problem, values, samples: int, smoothing: float):
                     eccentricities=(1.0,))
     count = int(round(values[problem.model.count_variable]))
     solver = PhaseSolver(fixed, count)
-    ver = verify(fixed, values)
+    ver = solver.verify(fixed, values)
     if not ver.sequences:
         from .errors import SolveError
         raise SolveError(f"the NLP cannot evaluate this design: {ver.message}")
-    nlp = solver.nlp(ver.sequences, 0.0)
-    guess = solver.guess(nlp, ver, values)
-    lbx, ubx = nlp.bounds(guess)
+    nlp = solver.nlp(ver.sequences)
+    guess = start_guess(nlp, ver)
+    lbx, ubx = nlp.bounds(guess, ver.sequences)
     x0 = np.clip(nlp.pack(guess), lbx, ubx)
-    params = nlp.parameters()
+    params = nlp.parameters(ver.sequences)
+    lbg, ubg = nlp.constraint_bounds(fixed, ver.sequences)
+    ipopt = nlp.solver(fixed.solver.hessian)
     t0 = time.perf_counter()
-    sol = nlp.solver(x0=x0, lbx=lbx, ubx=ubx, lbg=nlp.lbg, ubg=nlp.ubg, p=params)
+    sol = ipopt(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=params)
     t_solve = time.perf_counter() - t0
-    status = nlp.solver.stats()["return_status"]
+    status = ipopt.stats()["return_status"]
     x = np.array(sol["x"]).ravel()
     ripples, means, peaks = (np.array(v).ravel() for v in nlp.surrogate(x, params))
-    w_hi, w_lo = nlp.unpack(x)["w_e1"]
-    jac = nlp.solver.get_function("nlp_jac_g")
+    w_hi, w_lo = x[nlp.layout.find(nlp.layout.x, "w_e1")]
+    jac = ipopt.get_function("nlp_jac_g")
     _, t_eval = _timed(lambda: jac(x, params), min_time=0.02)
     w1 = problem.input_speed
     fig = StrokeFigures.from_extremes(w_hi * w1, w_lo * w1, means[0] * w1, w1)
@@ -309,58 +311,3 @@ def _label(method: str, rho) -> str:
         return f"plain log-sum-exp, ρ = {rho:g}"
     return {"sampled": "sampled, N samples", "exact": "exact, n_grid",
             "solve": "full solves (δ minus the best solve's δ)"}.get(method, method)
-
-
-# --------------------------------------------------------------------------- solve results
-def solve_accuracy(problem, best) -> dict:
-    """The ``accuracy`` dict of a :class:`~optdesign.solve.result.SolveResult`.
-
-    Which evaluators were used and, at the returned optimum ``best`` (a PhaseResult or None),
-    their estimated errors:
-
-    * ``exact_error_estimate``: largest change of δ and of the ratio over the listed
-      eccentricities when the exact evaluator's search grid is refined from ``exact_grid`` to
-      4·``exact_grid`` (its root finding is to 1e-14 rad, so this is ~1e-15 unless a run or a
-      stationary point was missed);
-    * ``surrogate_gap``: the NLP's δ minus the exact δ at the optimum (the log-sum-exp part of
-      the surrogate only matters at minima inside a run; hand-overs and peaks are exact);
-    * ``transmission_angle_sample_gap_deg``: least transmission angle at the NLP's crank samples
-      minus the exact least angle (what sampling the constraint misses; the driver tightens the
-      NLP's bound by it and re-solves when the exact check fails).
-    """
-    from .solve.verify import TOL_ANGLE_DEG, TOL_LENGTH_REL, TOL_RATIO, eccentricities_of
-
-    s = problem.solver
-    out = {"verification": "exact evaluator (crossings and stationary points by Brent's "
-                           "method; mean from exact angle increments)",
-           "nlp_samples": s.samples, "nlp_smoothing": s.smoothing,
-           "verification_tolerance_angle_deg": TOL_ANGLE_DEG,
-           "verification_tolerances": {"angle_deg": TOL_ANGLE_DEG, "ratio": TOL_RATIO,
-                                       "length_relative": TOL_LENGTH_REL},
-           "exact_grid": DEFAULT_GRID,
-           "exact_error_estimate": None, "surrogate_gap": None,
-           "transmission_angle_sample_gap_deg": None,
-           "benchmark": "optdesign bench accuracy (docs/accuracy.md)"}
-    if best is None or best.design is None:
-        return out
-    design = Design.from_problem(problem, best.design)
-    d_delta = d_ratio = 0.0
-    phi = np.linspace(0.0, 2 * np.pi, s.samples, endpoint=False)
-    sampled_angle = math.inf
-    for e in eccentricities_of(problem):          # e = 1 (the ratio) and the listed ones
-        coarse, _ = exact_figures(design, problem.stroke, problem.input_speed, e)
-        fine, _ = exact_figures(design, problem.stroke, problem.input_speed, e,
-                                n_grid=4 * DEFAULT_GRID)
-        definition = problem.objective.ripple
-        if e in problem.eccentricities:
-            d_delta = max(d_delta, abs(coarse.ripple(definition) - fine.ripple(definition)))
-        if e == 1.0:
-            d_ratio = abs(coarse.ratio - fine.ratio)
-        cos_mu = np.abs(design.sample(phi, e)["cos_mu"]).clip(max=1.0)
-        sampled_angle = min(sampled_angle, float(np.degrees(np.arccos(cos_mu.max()))))
-    out["exact_error_estimate"] = {"delta": d_delta, "ratio": d_ratio}
-    out["surrogate_gap"] = best.surrogate_gap
-    if best.min_transmission_angle_deg is not None:
-        out["transmission_angle_sample_gap_deg"] = sampled_angle - \
-            best.min_transmission_angle_deg
-    return out

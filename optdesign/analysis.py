@@ -4,7 +4,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from .design import Design
 from .envelope import StrokeFigures
@@ -14,7 +13,7 @@ from .exact import exact_figures
 
 @dataclass
 class AnalysisResult:
-    """What ``analyze`` prints: the contract's keys first (shared/DESIGN.md section 3)."""
+    """What ``analyze`` prints: the contract's keys first (docs/contract.md)."""
 
     assembles: bool
     min_transmission_angle_deg: float | None
@@ -46,24 +45,8 @@ class AnalysisResult:
 
 def transmission_angles(design: Design, eccentricity: float = 1.0,
                         n_grid: int = 720) -> np.ndarray:
-    """Least transmission angle min(μ, 180° - μ) of every chain over the turn, in degrees.
-
-    The worst angle is where |cos μ| peaks: found on a grid, then refined by a bounded
-    scalar search on the neighbouring cells.
-    """
-    phi = np.linspace(0.0, 2 * np.pi, n_grid, endpoint=False)
-    cos_mu = design.sample(phi, eccentricity)["cos_mu"]
-    h = phi[1] - phi[0]
-    worst = []
-    for k in range(cos_mu.shape[0]):
-        j = int(np.argmax(np.abs(cos_mu[k])))
-        res = minimize_scalar(lambda x: -abs(design.at(x % (2 * np.pi), eccentricity)
-                                             ["cos_mu"][k]),
-                              bounds=(phi[j] - h, phi[j] + h), method="bounded",
-                              options={"xatol": 1e-10})
-        c = min(max(-res.fun, abs(cos_mu[k, j])), 1.0)
-        worst.append(np.degrees(np.arccos(c)))          # min(μ, 180° - μ) = acos|cos μ|
-    return np.array(worst)
+    """Least transmission angle of every chain, degrees (:meth:`Design.transmission_angles`)."""
+    return design.transmission_angles(eccentricity, n_grid)
 
 
 def analyze(problem, values: dict | None = None) -> AnalysisResult:

@@ -103,15 +103,20 @@ class Design:
                 out.append((k, float(x % two_pi), float(c)))
         return out
 
-    def check_assembly(self, eccentricity: float = 1.0, n_samples: int = 2048) -> None:
+    def check_assembly(self, eccentricity: float = 1.0, n_samples: int = 2048,
+                       phi: np.ndarray | None = None, cos_mu: np.ndarray | None = None) -> None:
         """Raise :class:`AssemblyError` naming the first chain and crank angle that fail.
 
-        A chain assembles while the discriminant 1 - cos²μ >= 0 (shared/DESIGN.md 1.1); the
-        failing angle is located by bisection to 1e-9 rad. Peaks of |cos μ| near 1 are refined
-        between the samples, so a chain that fails only between two samples is caught too.
+        A chain assembles while the discriminant 1 - cos²μ >= 0 (the circle intersection of
+        :mod:`optdesign.mechanisms.geometry`); the failing angle is located by bisection to
+        1e-9 rad. Peaks of |cos μ| near 1 are refined between the samples, so a chain that
+        fails only between two samples is caught too. ``phi`` and ``cos_mu`` reuse a grid
+        that was already sampled (an :class:`~optdesign.evaluation.Evaluation`).
         """
-        phi = np.linspace(0.0, 2 * np.pi, n_samples, endpoint=False)
-        cos_mu = self.sample(phi, eccentricity)["cos_mu"]
+        if phi is None:
+            phi = np.linspace(0.0, 2 * np.pi, n_samples, endpoint=False)
+        if cos_mu is None:
+            cos_mu = self.sample(phi, eccentricity)["cos_mu"]
         bad = ~(np.abs(cos_mu) <= 1.0)
         if not bad.any():
             for chain, angle, c in self.cos_peaks(phi, eccentricity, cos_mu):
@@ -135,3 +140,30 @@ class Design:
                   else "joint positions undefined")
         raise AssemblyError(chain + 1, float(np.degrees(hi)) % 360.0,
                             f"{detail}; eccentricity {eccentricity:g}")
+
+    def transmission_angles(self, eccentricity: float = 1.0, n_grid: int = 720,
+                            phi: np.ndarray | None = None,
+                            cos_mu: np.ndarray | None = None) -> np.ndarray:
+        """Least transmission angle min(μ, 180° - μ) of every chain over the turn, in degrees.
+
+        The worst angle is where |cos μ| peaks: found on a grid (``phi``, sampled already as
+        ``cos_mu``, or ``n_grid`` equal steps), then refined by a bounded scalar search on the
+        neighbouring cells.
+        """
+        from scipy.optimize import minimize_scalar
+
+        if phi is None:
+            phi = np.linspace(0.0, 2 * np.pi, n_grid, endpoint=False)
+        if cos_mu is None:
+            cos_mu = self.sample(phi, eccentricity)["cos_mu"]
+        n, two_pi = phi.size, 2 * np.pi
+        worst = []
+        for k in range(cos_mu.shape[0]):
+            j = int(np.argmax(np.abs(cos_mu[k])))
+            lo = phi[j - 1] - (two_pi if j == 0 else 0.0)
+            hi = phi[(j + 1) % n] + (two_pi if j == n - 1 else 0.0)
+            res = minimize_scalar(lambda x: -abs(self.at(x % two_pi, eccentricity)["cos_mu"][k]),
+                                  bounds=(lo, hi), method="bounded", options={"xatol": 1e-10})
+            c = min(max(-res.fun, abs(cos_mu[k, j])), 1.0)
+            worst.append(np.degrees(np.arccos(c)))          # min(μ, 180° - μ) = acos|cos μ|
+        return np.array(worst)

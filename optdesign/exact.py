@@ -67,13 +67,28 @@ class _Curves:
         return f[:, 0], df[:, 0], out["theta"]
 
 
+def search_grid(design, eccentricity: float = 1.0, n_grid: int = DEFAULT_GRID) -> np.ndarray:
+    """The crank angles the exact evaluator brackets its roots on: ``n_grid`` equal steps and
+    the mechanism's breakpoints (where the speeds jump)."""
+    breaks = sorted({float(b) % TWO_PI for b in design.breakpoints(eccentricity)})
+    return np.union1d(np.linspace(0.0, TWO_PI, n_grid, endpoint=False), breaks)
+
+
 def exact_figures(design, stroke: str, input_speed: float, eccentricity: float = 1.0,
-                  n_grid: int = DEFAULT_GRID) -> tuple[StrokeFigures, list[Run]]:
-    """Exact ω_max, ω_min, time mean, δ and ratio of one stroke; also the envelope's runs."""
+                  n_grid: int = DEFAULT_GRID, sampled: dict | None = None,
+                  phi: np.ndarray | None = None) -> tuple[StrokeFigures, list[Run]]:
+    """Exact ω_max, ω_min, time mean, δ and ratio of one stroke; also the envelope's runs.
+
+    ``phi`` and ``sampled`` (``Design.sample`` on it) reuse a search grid that was sampled
+    already; by default the grid is :func:`search_grid` and is sampled here.
+    """
     curves = _Curves(design, stroke, eccentricity)
     breaks = sorted({float(b) % TWO_PI for b in design.breakpoints(eccentricity)})
-    phi = np.union1d(np.linspace(0.0, TWO_PI, n_grid, endpoint=False), breaks)
-    sampled = design.sample(phi, eccentricity)        # one pass: speeds and cos μ
+    if phi is None:
+        phi = search_grid(design, eccentricity, n_grid)
+        sampled = None
+    if sampled is None:
+        sampled = design.sample(phi, eccentricity)        # one pass: speeds and cos μ
     f, df = curves.stack(sampled)
     theta = sampled["theta"]
     runs = _runs(curves, phi, f)

@@ -1,4 +1,4 @@
-"""Problem files (shared/DESIGN.md section 3), loaded strictly into frozen dataclasses.
+"""Problem files (docs/contract.md), loaded strictly into frozen dataclasses.
 
 Every error is a :class:`ProblemError` whose one line names the file and the key path and says
 what would be right: ``pump.yaml: design.l3.upper must exceed lower (got 20 <= 56)``.
@@ -85,8 +85,10 @@ class Objective:
 @dataclass(frozen=True)
 class SolverSettings:
     samples: int = 90                   # crank samples per turn in the NLP (benchmarks/accuracy)
-    starts: int = 8                     # most starts (low-discrepancy sample) per phase count
-    agree: int = 2                      # stop once this many starts reach the same optimum
+    starts: int = 8                     # most IPOPT polishes per phase count
+    agree: int = 2                      # infeasible after agree + 1 local-infeasibility verdicts
+    screen: int = 512                   # designs screened before IPOPT (Sobol sample)
+    basins: int = 2                     # best basins of the screening polished (then lines)
     smoothing: float = 200.0            # log-sum-exp ρ, per unit of ω/ω1
     seed: int = 0
     max_iter: int = 100                 # IPOPT iterations per start
@@ -208,7 +210,7 @@ def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "pro
 
     design = _read_design(r, top, mech)
     options = _read_options(r, top.get("options", {}), mech)
-    constraints = _read_constraints(r, top.get("constraints", {}))
+    constraints = _read_constraints(r, top.get("constraints", {}), mech)
     objective = _read_objective(r, top.get("objective", {}))
     ecc = _read_regulation(r, top.get("regulation", {}))
     solver = _read_solver(r, top.get("solver", {}))
@@ -319,9 +321,14 @@ EXTRA_CONSTRAINT_KEYS: set[str] = {"max_speed_fraction_of_critical"}
 EXTRA_CONSTRAINT_SECTIONS: dict[str, str] = {"max_speed_fraction_of_critical": "driveline"}
 
 
-def _read_constraints(r, raw) -> Constraints:
+#: constraint keys every mechanism understands; a mechanism declares its own
+#: (``Mechanism.constraint_keys``, e.g. the four-bar's pin radius and Grashof)
+GENERAL_CONSTRAINT_KEYS = {"min_transmission_angle_deg", "assembly_margin"}
+
+
+def _read_constraints(r, raw, mech) -> Constraints:
     raw = r.mapping(raw, "constraints")
-    own = {"min_transmission_angle_deg", "min_pin_radius", "assembly_margin", "grashof"}
+    own = GENERAL_CONSTRAINT_KEYS | set(mech.constraint_keys)
     r.known_keys(raw, "constraints", own | EXTRA_CONSTRAINT_KEYS)
     kw = {}
     if "min_transmission_angle_deg" in raw:
@@ -388,10 +395,11 @@ def _read_regulation(r, raw) -> tuple[float, ...]:
 def _read_solver(r, raw) -> SolverSettings:
     raw = r.mapping(raw, "solver")
     r.known_keys(raw, "solver", {"samples", "starts", "agree", "smoothing", "seed",
-                                      "max_iter", "hessian", "peak_samples"})
+                                      "max_iter", "hessian", "peak_samples", "screen",
+                                      "basins"})
     kw = {}
     for key, low in (("samples", 16), ("starts", 1), ("agree", 1), ("seed", 0),
-                     ("max_iter", 1)):
+                     ("max_iter", 1), ("screen", 1), ("basins", 1)):
         if key in raw:
             kw[key] = r.integer(raw[key], f"solver.{key}", low)
     if "smoothing" in raw:

@@ -1,9 +1,10 @@
-"""optdesign bench accuracy and the accuracy report of solve results (issue 5)."""
+"""optdesign bench accuracy and the accuracy report of solve results."""
 import json
 
 import pytest
 
-from optdesign.accuracy import lse_figures, reference_figures, solve_accuracy
+from optdesign.accuracy import lse_figures, reference_figures
+from optdesign.solve.accuracy import solve_accuracy
 from optdesign.cli import main
 from optdesign.design import Design
 from optdesign.problem import load_problem

@@ -65,6 +65,10 @@ BAD = [
     (base_problem(options={"branch": "up"}), r"options\.branch must be one of left, right"),
     (base_problem(solver={"samples": 4}), r"solver\.samples must be at least 16"),
     (base_problem(design=[1, 2]), r"p\.yaml: design must be a mapping \(got list\)"),
+    # the pin radius belongs to the four-bar converter: a slotted lever has no pins
+    ({"mechanism": "slotted_lever", "input_speed": 0.628,
+      "design": {"XD": 292, "L": 74, "sections": 1}, "constraints": {"min_pin_radius": 10}},
+     r"p\.yaml: constraints\.min_pin_radius is not a known key; known: assembly_margin"),
 ]
 
 

@@ -21,11 +21,9 @@ def run(args) -> int:
     from ..solve.outputs import summary_text, write_outputs
 
     problem = load_problem(args.problem)
-    total = sum(min(problem.solver.starts, 1 if not problem.free_lengths() else
-                    problem.solver.starts) for _ in problem.counts())
     from tqdm import tqdm
-    with tqdm(total=total, desc="starts", unit="start", file=sys.stderr, disable=None,
-              leave=False) as bar:
+    with tqdm(total=len(problem.counts()), desc="phase counts", unit="count", file=sys.stderr,
+              disable=None, leave=False) as bar:
         result = solve(problem, progress=bar.update)
     out = Path(args.out) if args.out else Path("results") / problem.name
     files = write_outputs(result, problem, out, plots=not args.no_plots)

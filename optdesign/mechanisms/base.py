@@ -74,9 +74,12 @@ class Mechanism(ABC):
         ``joints`` (name -> 2-vector, for drawings) and ``links`` (pairs of joint names).
         """
 
-    def design_constraints(self, p: Mapping[str, ca.SX], count: int,
-                           constraints) -> list[tuple[str, ca.SX]]:
-        """Extra constraints g(p) >= 0 of this mechanism (e.g. pin radius), by name."""
+    #: keys of the ``constraints:`` section this mechanism understands beyond the general ones
+    constraint_keys: ClassVar[frozenset[str]] = frozenset()
+
+    def criteria(self, constraints, options: Mapping[str, str]) -> list:
+        """This mechanism's own constraints (:class:`optdesign.criteria.LengthConstraint`),
+        from the problem's ``constraints`` section and options."""
         return []
 
     def check_values(self, values: Mapping[str, float], count: int) -> None:
@@ -92,7 +95,7 @@ class Mechanism(ABC):
         """``casadi.Function`` (phi, p) -> (theta, dtheta, ddtheta, cos_mu).
 
         ``dtheta = dθ/dφ1`` and ``ddtheta = d²θ/dφ1²`` by algorithmic differentiation, so the
-        rocker speed is ω_k = ω1 · dtheta_k (shared/DESIGN.md 1.1).
+        rocker speed is ω_k = ω1 · dtheta_k (docs/formulation.md).
         """
         opts = self.default_options() | dict(options)
         phi = ca.SX.sym("phi")
@@ -106,6 +109,40 @@ class Mechanism(ABC):
         return ca.Function(f"{self.name}_n{count}", [phi, pvec],
                            [theta, dtheta, ddtheta, cos_mu],
                            ["phi", "p"], ["theta", "dtheta", "ddtheta", "cos_mu"])
+
+    @lru_cache(maxsize=64)
+    def speeds(self, count: int, options: tuple[tuple[str, str], ...] = ()) -> ca.Function:
+        """``casadi.Function`` (phi, p) -> (dtheta, cos_mu): the lean part of
+        :meth:`kinematics` that screening thousands of designs needs."""
+        full = self.kinematics(count, options)
+        phi = ca.SX.sym("phi")
+        pvec = ca.SX.sym("p", len(self.lengths))
+        _, dtheta, _, cos_mu = full(phi, pvec)
+        return ca.Function(f"{self.name}_speeds_n{count}", [phi, pvec], [dtheta, cos_mu],
+                           ["phi", "p"], ["dtheta", "cos_mu"])
+
+    @lru_cache(maxsize=64)
+    def chain(self, count: int, options: tuple[tuple[str, str], ...], k: int) -> ca.Function:
+        """(phi, p) -> θ_k, dθ_k/dφ, d²θ_k/dφ², cos μ_k, d cos μ_k/dφ of chain k alone: an SX function
+        holds only the nodes its outputs need, so a point that tracks one curve (a peak) does
+        not pay for every chain."""
+        full = self.kinematics(count, options)
+        phi = ca.SX.sym("phi")
+        pvec = ca.SX.sym("p", len(self.lengths))
+        theta, dtheta, ddtheta, cos_mu = full.call([phi, pvec], True, False)
+        return ca.Function(f"{self.name}_chain{k}_n{count}", [phi, pvec],
+                           [theta[k], dtheta[k], ddtheta[k], cos_mu[k],
+                            ca.jacobian(cos_mu[k], phi)],
+                           ["phi", "p"], ["theta", "dtheta", "ddtheta", "cos_mu", "dcos_mu"])
+
+    @lru_cache(maxsize=64)
+    def has_transmission_angle(self, count: int, options: tuple[tuple[str, str], ...]) -> bool:
+        """False for a mechanism whose cos μ does not move with the crank (no rod-rocker
+        pair, e.g. a slotted lever): its transmission angle needs no tracking."""
+        full = self.kinematics(count, options)
+        phi = ca.SX.sym("phi")
+        cos_mu = full.call([phi, ca.SX.sym("p", len(self.lengths))], True, False)[3]
+        return bool(ca.depends_on(cos_mu, phi))
 
     @lru_cache(maxsize=256)
     def mapped(self, count: int, options: tuple[tuple[str, str], ...], n_points: int):

@@ -1,4 +1,4 @@
-"""The n-phase four-bar converter of Sharkov & Kalinin 2022 (shared/seeds/000_*, DESIGN.md 1.1).
+"""The n-phase four-bar converter of Sharkov & Kalinin 2022, eqs. (1)-(4) (docs/papers.md).
 
 Crank OA (l1, angle φ1) turns about O. The main coupler is a disc hinged at A; its arm AB1 (l2)
 drives rocker O1B1 (l3) about O1 = (l0, 0). Rocker pivots O_i sit at radius l0, angle (i-1)τ,
@@ -24,7 +24,10 @@ BRANCH_SIGN = {"left": 1, "right": -1}
 
 class FourBarConverter(Mechanism):
     name = "fourbar_converter"
-    source = "Sharkov & Kalinin 2022, shared/seeds/000_41f7ea263fb1d3de.txt"
+    source = ("Sharkov O.V., Kalinin A.V. Analytical evaluation of the velocity fluctuation "
+              "of pulse continuously variable transmissions. BMSTU Journal of Mechanical "
+              "Engineering, 2022, no. 5, pp. 35-42, doi:10.18698/0536-1044-2022-5-35-42 "
+              "(docs/papers.md)")
     variables = (
         VariableSpec("l0", "mm", "crank centre O to every rocker pivot O_i"),
         VariableSpec("l1", "mm", "crank OA (the eccentricity; regulated)"),
@@ -74,19 +77,29 @@ class FourBarConverter(Mechanism):
             links += [("A", f"C{i}"), (f"C{i}", f"B{i}"), (f"O{i}", f"B{i}")]
         return {"theta": theta, "cos_mu": cos_mu, "joints": joints, "links": links}
 
-    def design_constraints(self, p, count, constraints):
-        """Pins must fit on the disc: l2 - l2' >= min_pin_radius (g >= 0)."""
-        return [("pin_radius", p["l2"] - p["l2_prime"] - constraints.min_pin_radius)]
+    constraint_keys = frozenset({"min_pin_radius", "grashof"})
 
-    def grashof_constraints(self, p):
-        """Chain 1 (O A B1 O1) a Grashof crank-rocker with l1 the crank: s + l <= p + q.
+    @staticmethod
+    def pin_radius(lengths, options) -> float:
+        """|AC_i|: l2 - l2' (collinear layout) or l2' (eq. 2 to the letter)."""
+        collinear = options.get("pin_layout", "collinear") == "collinear"
+        return lengths["l2"] - lengths["l2_prime"] if collinear else lengths["l2_prime"]
 
-        Written as l1 + X <= (sum of the other two) for each X of l0, l2, l3, so that no max()
-        is needed; summing two of them also gives l1 <= l0, l2, l3 (the crank is shortest).
-        """
-        links = {"l0": p["l0"], "l2": p["l2"], "l3": p["l3"]}
-        total = links["l0"] + links["l2"] + links["l3"]
-        return [(f"grashof[{k}]", total - 2 * v - p["l1"]) for k, v in links.items()]
+    def criteria(self, constraints, options):
+        """The pins must fit on the disc, |AC_i| >= min_pin_radius; with ``grashof: true``
+        chain 1 (O A B1 O1) is a Grashof crank-rocker with l1 the crank, s + l <= p + q,
+        written as l1 + X <= (sum of the other two) for each X of l0, l2, l3 so that no max()
+        is needed (summing two of them also gives l1 <= l0, l2, l3)."""
+        from ..criteria import LengthConstraint
+
+        out = [LengthConstraint("pin_radius", lambda p: self.pin_radius(p, options),
+                                lower=constraints.min_pin_radius, column="pin_radius")]
+        if constraints.grashof:
+            for k in ("l0", "l2", "l3"):
+                out.append(LengthConstraint(
+                    f"grashof[{k}]",
+                    lambda p, k=k: p["l0"] + p["l2"] + p["l3"] - 2 * p[k] - p["l1"]))
+        return out
 
     def check_values(self, values, count):
         if values["l1"] >= values["l0"]:

@@ -1,4 +1,4 @@
-"""The compact pulse reducer of Ambartsumyants & Subbotina 2015 (shared/seeds/003_*, DESIGN.md 1.3).
+"""The compact pulse reducer of Ambartsumyants & Subbotina 2015, eqs. (1)-(2) (docs/papers.md).
 
 A crank O A (``r1``) drives a slotted link; the crank pin's distance to the slot's pivot P (at
 the centre distance ``a`` from O) moves a toothed rack along the slot, and the rack turns the
@@ -45,7 +45,9 @@ TWO_PI = 2 * math.pi
 
 class PulseReducer(Mechanism):
     name = "pulse_reducer"
-    source = "Ambartsumyants & Subbotina 2015, shared/seeds/003_d78b75ad8c8e27c0.txt"
+    source = ("Ambartsumyants R.V., Subbotina M.I. Researching the links' motion dynamics "
+              "of new compact pulse reducer design. Pratsi Odeskoho politekhnichnoho "
+              "universytetu, 2015, no. 2(46), p. 57 ff. (docs/papers.md)")
     variables = (
         VariableSpec("r1", "mm", "crank radius r1 (regulated)"),
         VariableSpec("a", "mm", "centre distance a from the crank axis to each slot pivot"),
@@ -81,10 +83,13 @@ class PulseReducer(Mechanism):
             links.append(("A", f"P{k}"))
         return {"theta": theta, "cos_mu": cos_mu, "joints": joints, "links": links}
 
-    def design_constraints(self, p, count, constraints):
-        """The crank pin stays inside the pivot circle, r < 1 (eqs. 1-2):
-        1 - r1/a - assembly_margin >= 0 (g >= 0; dimensionless, O(1) for the NLP)."""
-        return [("crank_inside_pivots", 1 - p["r1"] / p["a"] - constraints.assembly_margin)]
+    def criteria(self, constraints, options):
+        """The crank pin stays inside the pivot circle, r = r1/a < 1 (eqs. 1-2):
+        1 - r1/a >= assembly_margin (dimensionless, O(1) for the NLP)."""
+        from ..criteria import LengthConstraint
+
+        return [LengthConstraint("crank_inside_pivots", lambda p: 1 - p["r1"] / p["a"],
+                                 lower=constraints.assembly_margin)]
 
     def check_values(self, values, count):
         if values["r1"] >= values["a"]:

@@ -1,4 +1,4 @@
-"""Vergov's lever-tooth pulse variator using the reverse stroke (shared/seeds/001_*, DESIGN.md 1.2).
+"""Vergov's lever-tooth pulse variator using the reverse stroke (Vergov, TU Sofia; docs/papers.md).
 
 The oscillation generator is a symmetric slotted-lever (cross-slider) mechanism, links 1-7 of
 the paper's Fig. 2: stand 1 at O, the movable (variator) stand 2 at distance ``L`` from O on the
@@ -41,7 +41,9 @@ from .base import Mechanism, VariableSpec
 
 class SlottedLever(Mechanism):
     name = "slotted_lever"
-    source = "Vergov (TU Sofia, 2017 grant), shared/seeds/001_e271d90910b06817.txt"
+    source = ("Vergov A. Kinematic analysis of the pulse lever-tooth variator using reverse "
+              "stroke. TU Sofia, Plovdiv branch (internal grant 2017; our copy names no "
+              "venue) (docs/papers.md)")
     variables = (
         VariableSpec("XD", "mm", "distance from stand 1 (O) to the pivot D of the kulisa-crank 7"),
         VariableSpec("L", "mm", "distance between the centres of stands 1 and 2 (regulated)"),
@@ -72,10 +74,13 @@ class SlottedLever(Mechanism):
             links += [("O", f"A{k}"), ("S2", f"A{k}"), ("D", f"A{k}")]
         return {"theta": theta, "cos_mu": cos_mu, "joints": joints, "links": links}
 
-    def design_constraints(self, p, count, constraints):
+    def criteria(self, constraints, options):
         """Link 7 oscillates only while its pivot D lies beyond A's circle, XD > L:
-        1 - L/XD - assembly_margin >= 0 (g >= 0; dimensionless, O(1) for the NLP)."""
-        return [("pivot_outside_circle", 1 - p["L"] / p["XD"] - constraints.assembly_margin)]
+        1 - L/XD >= assembly_margin (dimensionless, O(1) for the NLP)."""
+        from ..criteria import LengthConstraint
+
+        return [LengthConstraint("pivot_outside_circle", lambda p: 1 - p["L"] / p["XD"],
+                                 lower=constraints.assembly_margin)]
 
     def check_values(self, values, count):
         if values["XD"] <= values["L"]:

@@ -14,6 +14,7 @@ from dataclasses import replace
 
 from ..errors import OptDesignError
 from ..solve import PhaseSolver, solve_phase
+from ..criteria import LengthConstraint, constraints_of
 from ..solve.starts import start_designs
 
 #: the ripple cap of the largest-ratio solve: loose (midrange δ never exceeds 2)
@@ -33,11 +34,15 @@ def _solver(problem, count: int) -> PhaseSolver:
     return _SOLVERS[key]
 
 
-def pin_radius(values: dict) -> float | None:
-    """|AC_i| = l2 - l2' of the four-bar converter; None for a mechanism without pins."""
-    if "l2" in values and "l2_prime" in values:
-        return float(values["l2"] - values["l2_prime"])
-    return None
+def criteria_columns(problem, values: dict) -> dict:
+    """The report columns the problem's criteria give a design (e.g. the four-bar's pin
+    radius, as its mechanism computes it under the file's pin layout)."""
+    lengths = {k: float(values[k]) for k in problem.model.lengths}
+    out = {}
+    for c in constraints_of(problem):
+        if isinstance(c, LengthConstraint) and c.column:
+            out[c.column] = float(c.formula(lengths))
+    return out
 
 
 def _record(problem, count, tag, kind, epsilon, values, ver, status, multiplier, t0,
@@ -52,7 +57,8 @@ def _record(problem, count, tag, kind, epsilon, values, ver, status, multiplier,
             "ratio": ver.ratio if ver is not None and feasible else None,
             "min_transmission_angle_deg": ver.min_angle_deg if ver is not None and feasible
             else None,
-            "pin_radius": pin_radius(values) if feasible else None,
+            **({k: (v if feasible else None) for k, v in
+                criteria_columns(problem, values or problem.start_values()).items()}),
             "ratio_multiplier": multiplier, "ipopt_status": ipopt_status,
             "iterations": iterations, "tries": tries, "time_s": time.perf_counter() - t0,
             "note": note}
@@ -67,7 +73,7 @@ def solve_end(problem, count: int, kind: str) -> dict:
     """
     t0 = time.perf_counter()
     if kind == "least_ripple":
-        res = solve_phase(problem, count)
+        res = solve_phase(problem, count, solver=_solver(problem, count))
         iterations = res.iterations
         if res.status != "optimal":
             return _record(problem, count, kind, kind, None, None, None, res.status, None, t0,
@@ -79,12 +85,13 @@ def solve_end(problem, count: int, kind: str) -> dict:
                        "Solve_Succeeded")
     q = replace(problem, objective=replace(problem.objective, minimize="-ratio",
                                            max_ripple=LOOSE_MAX_RIPPLE))
-    res = solve_phase(q, count)
+    res = solve_phase(q, count, solver=_solver(q, count))
     if res.status != "optimal":
         return _record(problem, count, kind, kind, None, None, None, res.status, None, t0,
                        res.iterations, len(res.starts), "", res.message)
     ratio = res.ratio * (1 - END_RATIO_BACKOFF)
-    rec, ver, values, _ = _solver(problem, count).solve_from(dict(res.design), min_ratio=ratio)
+    outcome = _solver(problem, count).solve_from(dict(res.design), min_ratio=ratio)
+    rec, ver, values = outcome.record, outcome.verification, outcome.values
     iterations = res.iterations + rec.iterations
     if rec.feasible and ver.delta <= res.delta:
         return _record(problem, count, kind, kind, ratio, values, ver, "optimal",
@@ -110,7 +117,8 @@ def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
 
     for values in attempts():
         try:
-            rec, ver, values, _ = solver.solve_from(values, min_ratio=epsilon)
+            outcome = solver.solve_from(values, min_ratio=epsilon)
+            rec, ver, values = outcome.record, outcome.verification, outcome.values
         except (OptDesignError, RuntimeError, ValueError, ArithmeticError) as exc:
             # one start that breaks the evaluator (CasADi raises RuntimeError) is one failed
             # start, not a failed sweep

@@ -1,70 +1,103 @@
-"""Multi-start IPOPT over every admissible phase count, each optimum re-verified exactly."""
+"""Screen, polish the best basins with IPOPT, verify exactly: every admissible phase count.
+
+Per phase count: one NLP is built (:class:`~optdesign.solve.nlp.PhaseNLP`) and reused by every
+start, refinement and Pareto point; the box is screened (:mod:`optdesign.solve.screening`)
+and the best basins are polished by IPOPT; every optimum is re-verified exactly
+(:mod:`optdesign.solve.verify`) and re-solved while its exact structure disagrees with the
+NLP's (hand-over order, an angle on its window, the transmission angle dipping between
+samples). The best verified design wins.
+"""
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import replace
+from contextlib import contextmanager
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..accuracy import solve_accuracy
-from ..design import Design
+from ..criteria import objective_of
+from .accuracy import solve_accuracy
 from .nlp import PhaseNLP
 from .result import PhaseResult, SolveResult, StartRecord
-from .starts import start_designs
-from .verify import Verification, eccentricities_of, verify
+from .screening import line_seeds, screen
+from .verify import Verification, start_guess, verify
 
 SUCCESS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 MAX_REFINEMENTS = 4
 ANGLE_SAFETY_DEG = 0.01
-#: two optima "agree" within this relative difference (the multistart stopping rule)
-AGREE_REL = 1e-4
+#: two polished optima are one basin when their designs differ by less than this (relative
+#: to the box) and their objectives by less than SAME_KEY_REL
+SAME_DESIGN = 1e-4
+SAME_KEY_REL = 1e-6
+
+
+@dataclass
+class Timings:
+    """Wall time per stage, seconds."""
+
+    build: float = 0.0
+    screening: float = 0.0
+    ipopt: float = 0.0
+    verification: float = 0.0
+
+    @contextmanager
+    def stage(self, name: str):
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            setattr(self, name, getattr(self, name) + time.perf_counter() - t0)
+
+    def add(self, other: "Timings") -> None:
+        for k, v in other.to_dict().items():
+            setattr(self, k, getattr(self, k) + v)
+
+    def to_dict(self) -> dict:
+        return {"build": self.build, "screening": self.screening, "ipopt": self.ipopt,
+                "verification": self.verification}
+
+
+@dataclass
+class Outcome:
+    """What one polish returns: the IPOPT record, the exact verification of the design it
+    ended on, that design's values, and the surrogate's worst δ there."""
+
+    record: StartRecord
+    verification: Verification
+    values: dict
+    surrogate: float | None
 
 
 class PhaseSolver:
-    """Solves the NLP of one phase count from any start; keeps the built NLPs for re-use
-    (warm starts along a sweep re-solve the same NLP with other parameters)."""
+    """Solves the NLP of one phase count from any start, on NLPs built once and kept."""
 
     def __init__(self, problem, count: int):
         self.problem = problem
         self.count = count
-        self._nlps: dict = {}
+        self.timings = Timings()
+        self._nlps: dict[int, PhaseNLP] = {}
 
-    def nlp(self, sequences, extra_angle: float, hessian: str | None = None) -> PhaseNLP:
-        hessian = hessian or self.problem.solver.hessian
-        key = (sequences, round(extra_angle, 6), hessian)
-        if key not in self._nlps:
-            c = self.problem.constraints
-            mu = min(c.min_transmission_angle_deg + extra_angle, 89.0) if \
-                c.min_transmission_angle_deg > 0 else 0.0
-            tightened = replace(self.problem, constraints=replace(
-                c, min_transmission_angle_deg=mu), solver=replace(self.problem.solver,
-                                                                   hessian=hessian))
-            self._nlps[key] = PhaseNLP(tightened, self.count, sequences)
-        return self._nlps[key]
+    def nlp(self, sequences) -> PhaseNLP:
+        """The NLP with enough hand-over slots for ``sequences`` (built at most once)."""
+        need = max((len(s) for s in sequences), default=1)
+        for slots, nlp in self._nlps.items():
+            if slots >= need:
+                return nlp
+        with self.timings.stage("build"):
+            nlp = PhaseNLP(self.problem, self.count)
+            if nlp.slots < need:                     # more hand-overs than curves
+                nlp = PhaseNLP(self.problem, self.count, need)
+        self._nlps[nlp.slots] = nlp
+        return nlp
 
-    def guess(self, nlp: PhaseNLP, ver: Verification, values: dict) -> dict:
-        """Initial values of every NLP variable from the exact evaluation of a design."""
-        design = Design.from_problem(self.problem, values)
-        w1 = self.problem.input_speed
-        guess = {"lengths": [values[k] / s for k, s in zip(nlp.free, nlp.scale)],
-                 "worst_ripple": [ver.delta]}
-        for i, e in enumerate(nlp.eccs):
-            tag = f"e{e:g}"
-            fig = ver.figures[i]
-            guess[f"w_{tag}"] = [fig.omega_max / (w1 * e), fig.omega_min / (w1 * e)]
-            dth = design.sample(nlp.phi, e)["dtheta"]
-            f = np.vstack([s * dth for s in nlp.signs])
-            guess[f"phi_peak_{tag}"] = nlp.phi[np.argmax(f, axis=1)]
-            guess[f"phi_handover_{tag}"] = ver.handovers[i]
-        return guess
+    def verify(self, problem, values) -> Verification:
+        with self.timings.stage("verification"):
+            return verify(problem, values)
 
     def solve_from(self, values: dict, min_ratio=None, max_ripple=None,
-                   ver: Verification | None = None):
-        """IPOPT from one start; refined until the exact check agrees with the NLP's structure.
-
-        Returns (record, verification, values, surrogate δ).
-        """
+                   ver: Verification | None = None) -> Outcome:
+        """IPOPT from one start; refined until the exact check agrees with the NLP's structure."""
         problem = self.problem
         if min_ratio is not None or max_ripple is not None:
             obj = replace(problem.objective,
@@ -72,36 +105,39 @@ class PhaseSolver:
                           max_ripple=problem.objective.max_ripple if max_ripple is None
                           else max_ripple)
             problem = replace(problem, objective=obj)
-        ver = ver or verify(problem, values)
+        ver = ver or self.verify(problem, values)
         start = dict(values)
         t0 = time.perf_counter()
-        iterations, extra_angle, status, surrogate = 0, ANGLE_SAFETY_DEG, "not run", None
-        multiplier = None
-        note = ""
+        # The NLP holds the worst transmission angle at exact points; the samples alone (a
+        # mechanism whose angle the NLP does not track) get a safety margin from the start.
+        iterations, status, surrogate = 0, "not run", None
+        tightening = 0.0
+        multiplier, note = None, ""
         hessian = problem.solver.hessian
         for _ in range(MAX_REFINEMENTS):
             if not ver.sequences:
                 note = ver.message
                 break
-            nlp = self.nlp(ver.sequences, extra_angle, hessian)
-            guess = self.guess(nlp, ver, values)
-            lbx, ubx = nlp.bounds(guess)
+            given = ver.sequences
+            nlp = self.nlp(given)
+            guess = start_guess(nlp, ver)
+            lbx, ubx = nlp.bounds(guess, ver.sequences)
             x0 = np.clip(nlp.pack(guess), lbx, ubx)
-            params = nlp.parameters(min_ratio, max_ripple)
-            sol = nlp.solver(x0=x0, lbx=lbx, ubx=ubx, lbg=nlp.lbg, ubg=nlp.ubg, p=params)
-            stats = nlp.solver.stats()
+            params = nlp.parameters(ver.sequences)
+            lbg, ubg = nlp.constraint_bounds(problem, ver.sequences, tightening)
+            with self.timings.stage("build"):
+                solver = nlp.solver(hessian)
+            with self.timings.stage("ipopt"):
+                sol = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=params)
+            stats = solver.stats()
             status = stats["return_status"]
             iterations += int(stats["iter_count"])
             x = np.array(sol["x"]).ravel()
-            # d f*/d lbg = -lam_g (CasADi's sign convention for a lower bound)
-            multiplier = -float(np.array(sol["lam_g"]).ravel()[
-                nlp.layout.find(nlp.layout.g, "min_ratio")][0])
+            multiplier = nlp.multiplier(sol["lam_g"], "min_ratio")
             at_window = nlp.at_window_bound(x, lbx, ubx)
             trial = values | nlp.lengths_of(x)
-            new = verify(problem, trial)
-            ripples = np.array(nlp.surrogate(x, params)[0]).ravel()
-            listed = [i for i, e in enumerate(nlp.eccs) if e in problem.eccentricities]
-            surrogate = float(ripples[listed].max())
+            new = self.verify(problem, trial)
+            surrogate = nlp.worst_ripple(x, params)
             if status == "Maximum_Iterations_Exceeded" and hessian == "limited-memory":
                 # The quasi-Newton run stalled: once more from the same start with CasADi's
                 # exact Hessian, which converges, or certifies local infeasibility, where
@@ -109,81 +145,114 @@ class PhaseSolver:
                 hessian = "exact"
                 continue
             if status not in SUCCESS:
-                note = _binding(nlp, np.array(sol["g"]).ravel())
+                note = nlp.binding(np.array(sol["g"]).ravel(), lbg, ubg)
                 values, ver = (trial, new) if new.sequences else (values, ver)
                 break
             values, ver = trial, new
             if "transmission_angle" in ver.violations:
-                extra_angle += ver.violations["transmission_angle"] + ANGLE_SAFETY_DEG
+                tightening += ver.violations["transmission_angle"] + ANGLE_SAFETY_DEG
                 continue
-            if ver.sequences != nlp.sequences or at_window:
+            if ver.sequences != given or at_window:
                 continue        # hand-overs changed order, or an angle ran to its window
             break
         record = StartRecord(start=start, ipopt_status=status, iterations=iterations,
                              time_s=time.perf_counter() - t0,
                              feasible=bool(ver.feasible and status in SUCCESS),
                              delta=ver.delta, note=note, ratio_multiplier=multiplier)
-        return record, ver, values, surrogate
+        return Outcome(record, ver, values, surrogate)
 
 
-def _binding(nlp: PhaseNLP, g: np.ndarray) -> str:
-    """Name of the constraint block most violated at IPOPT's last iterate."""
-    viol = np.maximum(nlp.lbg - g, g - nlp.ubg)
-    viol[~np.isfinite(viol)] = 0
-    if viol.size == 0 or viol.max() <= 1e-6:
-        return ""
-    i = int(np.argmax(viol))
-    return nlp.layout.name_of(nlp.layout.g, i)
-
-
-def solve_phase(problem, count: int, progress=None) -> PhaseResult:
-    """Best verified optimum of one phase count over the multi-start."""
+def solve_phase(problem, count: int, solver: PhaseSolver | None = None) -> PhaseResult:
+    """Best verified optimum of one phase count: screen, then polish the best basins."""
     if not problem.free_lengths():
         fixed = _fixed_infeasible(problem, count)
         if fixed is not None:
             return fixed
-    solver = PhaseSolver(problem, count)
-    starts = start_designs(problem, count, problem.solver.starts)
-    if not starts:
-        return PhaseResult(count, "infeasible", binding="assembly",
-                           message=f"no design within the bounds assembles at every listed "
-                                   f"eccentricity with {count} phases")
-    result = PhaseResult(count, "failed")
-    best_key, keys = math.inf, []
-    for design in starts:
-        record, ver, values, surrogate = solver.solve_from(dict(design.values))
-        result.starts.append(record)
-        result.iterations += record.iterations
-        if progress:
-            progress()
-        if not record.feasible:
-            # Stopping rule for infeasible problems: no start feasible, and IPOPT found
-            # `agree + 1` of them locally infeasible on this same constraint.
-            verdicts = [s.note for s in result.starts
-                        if s.ipopt_status == "Infeasible_Problem_Detected"]
-            if best_key == math.inf and record.note and \
-                    verdicts.count(record.note) >= problem.solver.agree + 1:
+    solver = solver or PhaseSolver(problem, count)
+    s = problem.solver
+    with solver.timings.stage("screening"):
+        screening = screen(problem, count, s.screen)
+    seeds = screening.seeds
+    result = PhaseResult(count, "failed", screening=screening.to_dict())
+    best: Outcome | None = None
+    optima: list[Outcome] = []
+    polished = 0
+    for seed in seeds:
+        if polished >= s.starts or (best is not None and polished >= s.basins):
+            break
+        outcome = solver.solve_from(dict(seed.values))
+        polished += 1
+        result.starts.append(outcome.record)
+        result.iterations += outcome.record.iterations
+        if not outcome.record.feasible:
+            # no feasible design yet, and IPOPT found `agree + 1` starts locally infeasible
+            # on this same constraint: the phase count is infeasible
+            verdicts = [r.note for r in result.starts
+                        if r.ipopt_status == "Infeasible_Problem_Detected"]
+            if best is None and outcome.record.note and \
+                    verdicts.count(outcome.record.note) >= s.agree + 1:
                 break
             continue
-        key = ver.delta if problem.objective.minimize == "ripple" else -ver.ratio
-        keys.append(key)
-        if key < best_key:
-            best_key = key
-            result = _fill(result, problem, values, ver, surrogate)
-        # Multistart stopping rule: the best optimum has been reached from `agree` starts.
-        if sum(abs(k - best_key) <= AGREE_REL * max(1e-3, abs(best_key)) for k in keys) >= \
-                problem.solver.agree:
+        if not any(_same_optimum(problem, outcome, o) for o in optima):
+            optima.append(outcome)
+        if best is None or outcome.verification.key < best.verification.key:
+            best = outcome
+    # Line screening through the best optimum: basins beside its face, polished while they
+    # improve on it (within the polish budget).
+    tried: list[dict] = []
+    while best is not None and polished < s.starts:
+        with solver.timings.stage("screening"):
+            beside = [c for c in line_seeds(problem, count, best.values)
+                      if not any(_close(problem, c.values, t) for t in tried)]
+        if not beside:
             break
-    if result.status != "optimal":
-        notes = [s.note for s in result.starts if s.note]
-        statuses = {s.ipopt_status for s in result.starts}
-        # Infeasible only on IPOPT's word; starts that ran out of iterations prove nothing.
-        result.status = "infeasible" if "Infeasible_Problem_Detected" in statuses else "failed"
-        result.binding = max(set(notes), key=notes.count) if notes else None
-        result.message = (f"no start reached a verified feasible optimum (IPOPT: "
-                          f"{', '.join(sorted(statuses))})"
-                          + (f"; binding: {result.binding}" if result.binding else ""))
+        tried.append(beside[0].values)
+        outcome = solver.solve_from(dict(beside[0].values))
+        polished += 1
+        result.starts.append(outcome.record)
+        result.iterations += outcome.record.iterations
+        if not outcome.record.feasible:
+            continue
+        if not any(_same_optimum(problem, outcome, o) for o in optima):
+            optima.append(outcome)
+        if outcome.verification.key < best.verification.key - \
+                SAME_KEY_REL * max(1e-3, abs(best.verification.key)):
+            best = outcome
+        else:
+            break
+    result.screening |= {"polished": polished, "distinct_optima": len(optima)}
+    result.timings = solver.timings.to_dict()
+    if best is not None:
+        return _fill(result, problem, best)
+    notes = [r.note for r in result.starts if r.note]
+    statuses = {r.ipopt_status for r in result.starts}
+    if not seeds:
+        result.status, result.binding = "infeasible", "assembly"
+        result.message = (f"no design within the bounds assembles at every listed "
+                          f"eccentricity with {count} phases")
+        return result
+    # Infeasible only on IPOPT's word; starts that ran out of iterations prove nothing.
+    result.status = "infeasible" if "Infeasible_Problem_Detected" in statuses else "failed"
+    result.binding = max(set(notes), key=notes.count) if notes else None
+    result.message = (f"no start reached a verified feasible optimum (IPOPT: "
+                      f"{', '.join(sorted(statuses))})"
+                      + (f"; binding: {result.binding}" if result.binding else ""))
     return result
+
+
+def _close(problem, a: dict, b: dict) -> bool:
+    free = problem.free_lengths()
+    return all(abs(a[k] - b[k]) <= 1e-3 * (problem.design[k].upper - problem.design[k].lower)
+               for k in free)
+
+
+def _same_optimum(problem, a: Outcome, b: Outcome) -> bool:
+    free = problem.free_lengths()
+    span = np.array([problem.design[k].upper - problem.design[k].lower for k in free])
+    da = np.array([a.values[k] for k in free]) - np.array([b.values[k] for k in free])
+    ka, kb = a.verification.key, b.verification.key
+    return bool(np.all(np.abs(da) <= SAME_DESIGN * span) and
+                abs(ka - kb) <= SAME_KEY_REL * max(1e-3, abs(kb)))
 
 
 def _fixed_infeasible(problem, count: int) -> PhaseResult | None:
@@ -199,17 +268,17 @@ def _fixed_infeasible(problem, count: int) -> PhaseResult | None:
                                + (f" ({ver.message})" if ver.message else ""))
 
 
-def _fill(result: PhaseResult, problem, values, ver: Verification, surrogate) -> PhaseResult:
-    count_key = problem.model.count_variable
+def _fill(result: PhaseResult, problem, outcome: Outcome) -> PhaseResult:
+    ver, values = outcome.verification, outcome.values
     design = {k: float(values[k]) for k in problem.model.lengths}
-    design[count_key] = result.phases
+    design[problem.model.count_variable] = result.phases
     result.status = "optimal"
     result.design = design
     result.delta = ver.delta
     result.ratio = ver.ratio
     result.min_transmission_angle_deg = ver.min_angle_deg
-    result.surrogate_delta = surrogate
-    result.surrogate_gap = None if surrogate is None else surrogate - ver.delta
+    result.surrogate_delta = outcome.surrogate
+    result.surrogate_gap = None if outcome.surrogate is None else outcome.surrogate - ver.delta
     result.regulation = ver.regulation()
     result.message = ""
     return result
@@ -218,18 +287,24 @@ def _fill(result: PhaseResult, problem, values, ver: Verification, surrogate) ->
 def solve(problem, progress=None) -> SolveResult:
     """Solve the problem for every admissible phase count and pick the best verified one."""
     t0 = time.perf_counter()
-    per_phase = [solve_phase(problem, n, progress) for n in problem.counts()]
+    per_phase = []
+    for n in problem.counts():
+        per_phase.append(solve_phase(problem, n))
+        if progress:
+            progress()
     ok = [p for p in per_phase if p.status == "optimal"]
-    if problem.objective.minimize == "ripple":
-        best = min(ok, key=lambda p: p.delta, default=None)
-    else:
-        best = max(ok, key=lambda p: p.ratio, default=None)
+    objective = objective_of(problem)
+    best = min(ok, key=lambda p: objective.rank(p.delta, p.ratio), default=None)
     if best:
         status, message = "optimal", ""
     else:
         status = "infeasible" if all(p.status == "infeasible" for p in per_phase) else "failed"
         message = "; ".join(f"n={p.phases}: {p.message}" for p in per_phase)
-    accuracy = solve_accuracy(problem, best)        # inside solve_time_s: part of the solve
+    timings = Timings()
+    for p in per_phase:
+        timings.add(Timings(**p.timings) if p.timings else Timings())
+    with timings.stage("verification"):
+        accuracy = solve_accuracy(problem, best)        # inside solve_time_s: part of the solve
     return SolveResult(
         name=problem.name, status=status,
         design=best.design if best else None,
@@ -245,4 +320,4 @@ def solve(problem, progress=None) -> SolveResult:
                    "eccentricities": list(problem.eccentricities)},
         accuracy=accuracy,
         message=message, stroke=problem.stroke, mechanism=problem.mechanism,
-        input_speed=problem.input_speed)
+        input_speed=problem.input_speed, timings_s=timings.to_dict())

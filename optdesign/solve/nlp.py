@@ -1,26 +1,32 @@
-"""The NLP of one phase count: free lengths (scaled to O(1)) -> least ripple, solved by IPOPT.
-
-Sign convention, stated once: every inequality is g(x) >= 0.
+"""The NLP of one phase count, built once: free lengths (scaled to O(1)) -> least ripple.
 
 Speeds are per unit crank speed, f_c(φ) = s·dθ_k/dφ for each curve c = (stroke sign s,
-rocker k) (shared/DESIGN.md 1.1). For each eccentricity e the NLP carries
+rocker k) (Sharkov & Kalinin 2022, eqs. 5-8; docs/formulation.md). For each eccentricity e the
+NLP carries
 
 * ``w_hi`` (ω_max/ω1): one stationary point φ_m,c per curve with ``f_c'(φ_m,c) = 0`` and
-  ``w_hi - f_c(φ_m,c) >= 0``, so the peak is exact, not O(h²) (``solver: {peak_samples:
-  true}`` adds the epigraph ``w_hi - f_c(φ_j) >= 0`` at every sample as a safety net; it
-  costs n·N constraints and gains nothing on our benchmarks);
-* ``w_lo`` (ω_min/ω1): for every hand-over of the envelope from curve a to curve b, a free
-  angle φ_x with ``f_a(φ_x) - w_lo >= 0`` and ``f_b(φ_x) - w_lo >= 0``. Maximising w_lo puts
-  φ_x where min(f_a, f_b) peaks, i.e. at the crossing, whose value is the envelope's local
-  minimum: exact and conservative, with no equality that can become infeasible. Minima inside
-  a run are held by ``logsumexp_ρ(f(φ_j)) - w_lo >= 0`` at the samples (the conservative
-  smooth maximum of DESIGN.md section 2 where no crossing is involved);
+  ``w_hi - f_c(φ_m,c) >= 0``, so the peak is exact, not O(h²);
+* ``w_lo`` (ω_min/ω1): ``M`` hand-over slots, each a free angle φ_x with
+  ``f_a(φ_x) - w_lo >= 0`` and ``f_b(φ_x) - w_lo >= 0`` for the curves a, b the envelope hands
+  over between. Maximising w_lo puts φ_x where min(f_a, f_b) peaks, i.e. at the crossing, whose
+  value is the envelope's local minimum: exact and conservative, with no equality that can
+  become infeasible. Minima inside a run are held by ``logsumexp_ρ(f(φ_j)) - w_lo >= 0`` at the
+  samples (a conservative smooth maximum where no crossing is involved);
 * the time mean: on the run of curve c between hand-overs u and v, ∫ f_c dφ = θ_c(v) - θ_c(u),
-  so mean = Σ runs (θ_c(v) - θ_c(u))/2π. Any wrong boundary selects a lower curve, so the
-  sum never exceeds the true mean (conservative for the ratio); it is exact at the crossings.
+  so mean = Σ runs (θ_c(v) - θ_c(u))/2π. Any wrong boundary selects a lower curve, so the sum
+  never exceeds the true mean (conservative for the ratio); it is exact at the crossings.
 
-The hand-over sequence (which curve follows which) comes from the exact evaluator at the start
-design; the driver re-checks it at the optimum and re-solves if it changed.
+Built once. Which curves a slot hands over between is a *parameter* (one-hot selections of the
+curves, an "active" flag and a "last" flag per slot), so a change of the hand-over order, a
+new start, a tightened transmission-angle bound or a Pareto ε changes parameters and bounds,
+never the graph; a sequence longer than ``M`` slots rebuilds with more slots (rare: ``M``
+starts at the curve count, one hand-over into each). Every constraint's bounds come from its criterion
+(:mod:`optdesign.criteria`) at each solve.
+
+Construction (chosen by ``benchmarks/solve_scaling.py``): the mechanism's per-angle SX
+function and a per-sample SX function (cos²μ and the smooth maximum) are ``map``-ped over the
+samples and points inside an MX graph; CasADi differentiates the mapped functions as mapped
+derivatives, so the build costs one chain's derivatives, not N·n of them.
 """
 from __future__ import annotations
 
@@ -30,10 +36,9 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from ..criteria import constraints_of, objective_of
+from ..evaluation import eccentricities_of
 from ..mechanisms import STROKE_SIGNS
-
-#: weight of the worst ripple in the ``minimize: -ratio`` objective (a tie-break, see _build)
-RIPPLE_TIE_BREAK = 1e-6
 
 IPOPT_OPTIONS = {
     "ipopt.print_level": 0,
@@ -56,13 +61,18 @@ class Block:
     start: int
     size: int
 
+    @property
+    def slice(self) -> slice:
+        return slice(self.start, self.start + self.size)
+
 
 @dataclass
 class Layout:
-    """Where each quantity sits in x and g, so results and bindings can be read by name."""
+    """Where each quantity sits in x, g and p, so results and bindings can be read by name."""
 
     x: list[Block] = field(default_factory=list)
     g: list[Block] = field(default_factory=list)
+    p: list[Block] = field(default_factory=list)
 
     def add(self, blocks: list[Block], name: str, size: int) -> slice:
         start = blocks[-1].start + blocks[-1].size if blocks else 0
@@ -70,11 +80,21 @@ class Layout:
         return slice(start, start + size)
 
     def find(self, blocks: list[Block], name: str) -> slice:
-        b = next(b for b in blocks if b.name == name)
-        return slice(b.start, b.start + b.size)
+        return next(b for b in blocks if b.name == name).slice
 
     def name_of(self, blocks: list[Block], index: int) -> str:
         return next(b.name for b in blocks if b.start <= index < b.start + b.size)
+
+
+@dataclass
+class Quantities:
+    """The NLP's named quantities, over which the criteria write their expressions."""
+
+    lengths: dict                   # mm
+    ratio: ca.MX                    # time mean / ω1 at e = 1
+    worst_ripple: ca.MX             # epigraph variable t >= δ_e for every listed e
+    peak_speed: ca.MX               # ω_max at e = 1, rad/s
+    cos_mu_sq: dict                 # eccentricity tag -> cos²μ of every chain at every sample
 
 
 def smooth_max(values, rho):
@@ -92,17 +112,21 @@ def _wrap(angle):
     return ca.atan2(ca.sin(angle), ca.cos(angle))
 
 
-class PhaseNLP:
-    """The NLP for one phase count and one hand-over sequence per eccentricity.
+def tag_of(e: float) -> str:
+    return f"e{e:g}"
 
-    Parameters (``p`` of the solver): the fixed lengths, then ``min_ratio`` and ``max_ripple``,
-    so a Pareto sweep re-solves the same NLP with another ε.
+
+class PhaseNLP:
+    """The NLP of one phase count; ``slots`` hand-over slots per eccentricity.
+
+    Parameters ``p``: the fixed lengths, then per eccentricity the slots' curve selections
+    (``before``, ``after``: (curves + 1) × slots, the last curve the output at rest), their
+    ``active`` and ``last`` flags.
     """
 
-    def __init__(self, problem, count: int, sequences: tuple[tuple[int, ...], ...]):
+    def __init__(self, problem, count: int, slots: int | None = None):
         self.problem = problem
         self.count = count
-        self.sequences = sequences
         model = problem.model
         self.model = model
         self.free = problem.free_lengths()
@@ -112,34 +136,68 @@ class PhaseNLP:
                                for k in self.free])
         self.signs = STROKE_SIGNS[problem.stroke]
         self.n_curves = count * len(self.signs)
-        self.eccs = self._eccentricities()
-        s = problem.solver
-        self.phi = np.linspace(0.0, 2 * math.pi, s.samples, endpoint=False)
+        self.slots = slots or self.n_curves
+        self.eccs = eccentricities_of(problem)
+        self.listed = [i for i, e in enumerate(self.eccs) if e in problem.eccentricities]
+        self.phi = np.linspace(0.0, 2 * math.pi, problem.solver.samples, endpoint=False)
+        self.has_mu = model.has_transmission_angle(count, tuple(sorted(problem.options.items())))
+        self.criteria = constraints_of(problem)
+        self.objective = objective_of(problem)
         self.layout = Layout()
+        self._solvers: dict[str, ca.Function] = {}
         self._build()
 
-    def _eccentricities(self) -> tuple[float, ...]:
-        """Listed fractions, plus e = 1 where the ratio is defined (first)."""
-        return (1.0,) + tuple(e for e in self.problem.eccentricities if e != 1.0)
-
     # ------------------------------------------------------------------ building
+    def _sample_function(self, fn) -> ca.Function:
+        """(φ, p, 1/e) -> (cos²μ of every chain, smooth max of the curves): one sample."""
+        phi = ca.SX.sym("phi")
+        pv = ca.SX.sym("p", len(self.model.lengths))
+        inv_e = ca.SX.sym("inv_e")
+        _, dth, _, cos_mu = fn(phi, pv)
+        f = ca.vertcat(*[s * dth * inv_e for s in self.signs])
+        return ca.Function("sample", [phi, pv, inv_e],
+                           [cos_mu ** 2, smooth_max(f, self.problem.solver.smoothing), f])
+
+    def _points_function(self) -> ca.Function:
+        """(φ_peak (curves), φ_μ (2 per chain), p, 1/e) -> (f_c and f_c' at each curve's peak
+        angle, cos μ and d cos μ/dφ at each chain's two extreme angles): one SX function in
+        which each point evaluates its own chain alone."""
+        options = tuple(sorted(self.problem.options.items()))
+        chains = [self.model.chain(self.count, options, k) for k in range(self.count)]
+        phi_m = ca.SX.sym("phi_m", self.n_curves)
+        phi_mu = ca.SX.sym("phi_mu", 2 * self.count if self.has_mu else 0)
+        pv = ca.SX.sym("p", len(self.model.lengths))
+        inv_e = ca.SX.sym("inv_e")
+        f, df, cos_x, dcos_x = [], [], [], []
+        for c in range(self.n_curves):
+            s, k = self.signs[c // self.count], c % self.count
+            _, dth, ddth, _, _ = chains[k].call([phi_m[c], pv], True, False)
+            f.append(s * dth * inv_e)
+            df.append(s * ddth * inv_e)
+        for j in range(phi_mu.numel()):
+            _, _, _, cos_mu, dcos_mu = chains[j % self.count].call([phi_mu[j], pv], True, False)
+            cos_x.append(cos_mu)
+            dcos_x.append(dcos_mu)
+        return ca.Function("points", [phi_m, phi_mu, pv, inv_e],
+                           [ca.vertcat(*f), ca.vertcat(*df), ca.vertcat(ca.SX(0, 1), *cos_x),
+                            ca.vertcat(ca.SX(0, 1), *dcos_x)])
+
+    def _stack(self, rows):
+        """Curves × points from chains × points (stroke signs applied), plus the rest curve."""
+        return ca.vertcat(*[s * rows for s in self.signs], ca.MX(1, rows.shape[1]))
+
     def _build(self):
         P, L = self.problem, self.layout
         fn = self.model.kinematics(self.count, tuple(sorted(P.options.items())))
-        xs = ca.MX.sym("x", len(self.free))
-        ps = ca.MX.sym("p", len(self.fixed) + 2)
+        C, M, N = self.n_curves, self.slots, self.phi.size
+        xs = ca.MX.sym("lengths", len(self.free))
         L.add(L.x, "lengths", len(self.free))
+        x_parts, p_parts, g_rows = [xs], [], []
+        fixed = ca.MX.sym("fixed", len(self.fixed))
+        L.add(L.p, "fixed", len(self.fixed))
+        p_parts.append(fixed)
         lengths = {k: xs[i] * self.scale[i] for i, k in enumerate(self.free)}
-        lengths |= {k: ps[i] for i, k in enumerate(self.fixed)}
-        min_ratio, max_ripple = ps[len(self.fixed)], ps[len(self.fixed) + 1]
-
-        x_parts, g_parts, lbg, ubg = [xs], [], [], []
-
-        def constrain(name, expr, lower=0.0, upper=math.inf):
-            L.add(L.g, name, expr.numel())
-            g_parts.append(expr)
-            lbg.extend([lower] * expr.numel())
-            ubg.extend([upper] * expr.numel())
+        lengths |= {k: fixed[i] for i, k in enumerate(self.fixed)}
 
         def variable(name, size):
             v = ca.MX.sym(name, size)
@@ -147,132 +205,168 @@ class PhaseNLP:
             x_parts.append(v)
             return v
 
-        mu_min = P.constraints.min_transmission_angle_deg
-        cos_limit = min(math.cos(math.radians(mu_min)),
-                        math.sqrt(1.0 - P.constraints.assembly_margin))
-        rho = P.solver.smoothing
-        N = self.phi.size
-        fmap = fn.map(N)
-        ripples, means, peaks = [], [], []
-        for e_index, e in enumerate(self.eccs):
-            tag = f"e{e:g}"
+        def parameter(name, rows, cols=1):
+            v = ca.MX.sym(name, rows, cols)
+            L.add(L.p, name, rows * cols)
+            p_parts.append(ca.vec(v))
+            return v
+
+        sample_map = self._sample_function(fn).map(N)
+        points = self._points_function()
+        slot_map = fn.map(M)
+        ripples, means, peaks, cos_sq = [], [], [], {}
+        for e in self.eccs:
+            tag = tag_of(e)
             pvec = ca.vertcat(*[lengths[k] * (e if k == self.model.regulating_variable else 1)
                                 for k in self.model.lengths])
-            theta, dtheta, _, cos_mu = fmap(self.phi[None, :], pvec)
             # Speeds of eccentricity e in units of e·ω1: they shrink like e, and at e = 1e-6
-            # they would sit below IPOPT's tolerances and bound push (DESIGN.md 1.1: ripple
-            # and ratio are ratios, so the unit cancels).
-            dtheta = dtheta / e
-            f = ca.vertcat(*[s * dtheta for s in self.signs])            # curves × N
+            # they would sit below IPOPT's tolerances (ripple and ratio are ratios, so the
+            # unit cancels).
             w = variable(f"w_{tag}", 2)
             w_hi, w_lo = w[0], w[1]
-            constrain(f"transmission_angle[{tag}]",
-                      cos_limit**2 - ca.vec(cos_mu) ** 2)
-            if P.solver.peak_samples:
-                constrain(f"peak_samples[{tag}]", ca.vec(w_hi - f))
-            lse = ca.vertcat(*[smooth_max(f[:, j], rho) for j in range(N)])
-            constrain(f"trough_samples[{tag}]", lse - w_lo)
-            # Exact peaks: one stationary point per curve.
-            phi_m = variable(f"phi_peak_{tag}", self.n_curves)
-            _, dth_m, ddth_m, _ = fn.map(self.n_curves)(phi_m.T, pvec)
-            dth_m, ddth_m = dth_m / e, ddth_m / e
-            f_m = ca.vertcat(*[self._curve(dth_m, c, c) for c in range(self.n_curves)])
-            df_m = ca.vertcat(*[self._curve(ddth_m, c, c) for c in range(self.n_curves)])
-            constrain(f"peak_stationary[{tag}]", df_m, 0.0, 0.0)
-            constrain(f"peak_points[{tag}]", w_hi - f_m)
+            cos_mu_sq, lse, f_samples = sample_map(self.phi[None, :], pvec, 1.0 / e)
+            cos_sq[tag] = ca.vec(cos_mu_sq)
+            g_rows.append((f"trough_samples[{tag}]", ca.vec(lse) - w_lo))
+            if P.solver.peak_samples:          # a safety net: ω_max bounded at every sample
+                g_rows.append((f"peak_samples[{tag}]", ca.vec(w_hi - f_samples)))
+            # Exact peaks: one stationary point per curve; with a transmission angle, the
+            # largest and the least cos μ of every chain at a stationary point of its own, so
+            # the bound holds between samples too.
+            phi_m = variable(f"phi_peak_{tag}", C)
+            phi_mu = variable(f"phi_mu_{tag}", 2 * self.count) if self.has_mu else ca.MX(0, 1)
+            f_m, df_m, cos_x, dcos_x = points(phi_m, phi_mu, pvec, 1.0 / e)
+            g_rows.append((f"peak_stationary[{tag}]", df_m))
+            g_rows.append((f"peak_points[{tag}]", w_hi - f_m))
+            if self.has_mu:
+                g_rows.append((f"mu_stationary[{tag}]", dcos_x))
+                cos_sq[tag] = ca.vertcat(cos_sq[tag], cos_x ** 2)
             # Exact troughs at the hand-overs, and the exact mean over the runs.
-            seq = self.sequences[e_index]
-            m = len(seq)
-            phi_x = variable(f"phi_handover_{tag}", m)
-            th_x, dth_x, _, _ = fn.map(m)(phi_x.T, pvec)
-            dth_x = dth_x / e
-            lows, mean = [], 0
-            for i in range(m):
-                before, after = seq[i - 1], seq[i]
-                lows += [self._curve(dth_x, before, i) - w_lo, self._curve(dth_x, after, i) - w_lo]
-                if after < self.n_curves:                     # not the output-at-rest curve
-                    nxt = (i + 1) % m
-                    mean += _wrap(self._curve(th_x, after, nxt) - self._curve(th_x, after, i))
-            constrain(f"trough_handovers[{tag}]", ca.vertcat(*lows))
-            mean = mean / (2 * math.pi * e)
-            definition = P.objective.ripple
-            avg = 0.5 * (w_hi + w_lo) if definition == "midrange" else mean
+            phi_x = variable(f"phi_handover_{tag}", M)
+            before = parameter(f"before_{tag}", C + 1, M)
+            after = parameter(f"after_{tag}", C + 1, M)
+            active = parameter(f"active_{tag}", M)
+            last = parameter(f"last_{tag}", M)
+            th_x, dth_x, _, _ = slot_map(phi_x.T, pvec)
+            f_x, th = self._stack(dth_x / e), self._stack(th_x)
+            g_rows.append((f"trough_handovers[{tag}]",
+                           ca.vertcat(ca.sum1(before * f_x).T - w_lo,
+                                      ca.sum1(after * f_x).T - w_lo)))
+            th_start = ca.sum1(after * th).T
+            th_next = ca.sum1(after * ca.horzcat(th[:, 1:], th[:, :1])).T
+            th_first = ca.sum1(after * ca.repmat(th[:, 0], 1, M)).T
+            th_end = (1 - last) * th_next + last * th_first
+            mean = ca.dot(active, _wrap(th_end - th_start)) / (2 * math.pi * e)
+            avg = 0.5 * (w_hi + w_lo) if P.objective.ripple == "midrange" else mean
             ripples.append((w_hi - w_lo) / avg)
             means.append(mean)
             peaks.append(w_hi)
-        self.ratio_expr = means[0]
-        constrain("min_ratio", means[0] - min_ratio)
-        for name, g in self.model.design_constraints(lengths, self.count, P.constraints):
-            constrain(name, ca.vertcat(g))
-        if P.constraints.grashof and hasattr(self.model, "grashof_constraints"):
-            for name, g in self.model.grashof_constraints(lengths):
-                constrain(name, ca.vertcat(g))
-        for key, section in P.sections.items():
-            if hasattr(section, "solve_constraints"):
-                for name, g in section.solve_constraints(P, peaks[0] * P.input_speed):
-                    constrain(f"{key}.{name}", ca.vertcat(g))
-        listed = [i for i, e in enumerate(self.eccs) if e in P.eccentricities]
         t = variable("worst_ripple", 1)
-        constrain("ripple_epigraph", ca.vertcat(*[t - ripples[i] for i in listed]))
-        if P.objective.minimize == "ripple":
-            objective = t
-        else:
-            constrain("max_ripple", max_ripple - t)
-            # The ripple term breaks the tie lexicographically: it keeps w_hi and w_lo tight
-            # when the cap is slack (so the surrogate δ stays exact) for at most ~1e-6 of ratio.
-            objective = -means[0] + RIPPLE_TIE_BREAK * t
+        g_rows.append(("ripple_epigraph", ca.vertcat(*[t - ripples[i] for i in self.listed])))
+        q = Quantities(lengths=lengths, ratio=means[0], worst_ripple=t,
+                       peak_speed=peaks[0] * P.input_speed, cos_mu_sq=cos_sq)
+        self._criterion_blocks = []
+        for criterion in self.criteria:
+            for name, expr in criterion.rows(q):
+                g_rows.append((name, ca.vertcat(expr)))
+                self._criterion_blocks.append((name, criterion))
+        for name, expr in g_rows:
+            L.add(L.g, name, expr.numel())
         x = ca.vertcat(*x_parts)
-        g = ca.vertcat(*g_parts)
-        self.lbg, self.ubg = np.array(lbg), np.array(ubg)
-        self.surrogate = ca.Function("surrogate", [x, ps],
+        self.g = ca.vertcat(*[expr for _, expr in g_rows])
+        self.p_sym = ca.vertcat(*p_parts)
+        self.x_sym = x
+        self.f = self.objective.expression(q)
+        self.n_x, self.n_g, self.n_p = x.numel(), self.g.numel(), self.p_sym.numel()
+        self.surrogate = ca.Function("surrogate", [x, self.p_sym],
                                      [ca.vertcat(*ripples), ca.vertcat(*means),
                                       ca.vertcat(*peaks)])
-        opts = dict(IPOPT_OPTIONS) | {"ipopt.max_iter": P.solver.max_iter, "expand": True,
-                                      "ipopt.hessian_approximation": P.solver.hessian}
-        self.solver = ca.nlpsol(f"nlp_n{self.count}", "ipopt",
-                                {"x": x, "p": ps, "f": objective, "g": g}, opts)
-        self.n_x = x.numel()
 
-    def _curve(self, rows, c, col):
-        """Curve c of the stacked (sign, rocker) curves from rows over rockers, at column col."""
-        if c >= self.n_curves:                                   # output at rest
-            return ca.MX(0)
-        return self.signs[c // self.count] * rows[c % self.count, col]
+    def solver(self, hessian: str) -> ca.Function:
+        """IPOPT on this NLP with the exact Hessian or L-BFGS; each built at its first use."""
+        if hessian not in self._solvers:
+            opts = dict(IPOPT_OPTIONS) | {"ipopt.max_iter": self.problem.solver.max_iter,
+                                          "ipopt.hessian_approximation": hessian}
+            self._solvers[hessian] = ca.nlpsol(
+                f"nlp_n{self.count}", "ipopt",
+                {"x": self.x_sym, "p": self.p_sym, "f": self.f, "g": self.g}, opts)
+        return self._solvers[hessian]
 
-    # ------------------------------------------------------------------ parameters
-    def parameters(self, min_ratio: float | None = None, max_ripple: float | None = None):
-        P = self.problem
-        fixed = [P.design[k].value for k in self.fixed]
-        return np.array(fixed + [P.objective.min_ratio if min_ratio is None else min_ratio,
-                                 (P.objective.max_ripple or 1.0) if max_ripple is None
-                                 else max_ripple], dtype=float)
+    # ------------------------------------------------------------------ per solve
+    def parameters(self, sequences) -> np.ndarray:
+        """The fixed lengths and the slots' selections for one hand-over sequence per e."""
+        P, L = self.problem, self.layout
+        p = np.zeros(self.n_p)
+        p[L.find(L.p, "fixed")] = [P.design[k].value for k in self.fixed]
+        C, M = self.n_curves, self.slots
+        for e, seq in zip(self.eccs, sequences):
+            tag, m = tag_of(e), len(seq)
+            before, after = np.zeros((C + 1, M)), np.zeros((C + 1, M))
+            before[C, :] = after[C, :] = 1.0                     # idle slots: the rest curve
+            active, last = np.zeros(M), np.zeros(M)
+            for i in range(m):
+                before[:, i] = after[:, i] = 0.0
+                before[min(seq[i - 1], C), i] = 1.0
+                after[min(seq[i], C), i] = 1.0
+                active[i] = 1.0
+            last[m - 1] = 1.0
+            for name, value in (("before", before), ("after", after), ("active", active),
+                                ("last", last)):
+                p[L.find(L.p, f"{name}_{tag}")] = value.ravel(order="F")
+        return p
 
-    def bounds(self, guess: dict) -> tuple[np.ndarray, np.ndarray]:
-        """Variable bounds: the design's bounds, and windows around the start's angles."""
+    def constraint_bounds(self, problem, sequences, tightening_deg: float = 0.0):
+        """lbg, ubg of one solve: the criteria's bounds (for ``problem``'s ε and caps), the
+        envelope rows, and idle hand-over slots switched off."""
+        L = self.layout
+        lbg, ubg = np.zeros(self.n_g), np.full(self.n_g, np.inf)
+        for e, seq in zip(self.eccs, sequences):
+            tag = tag_of(e)
+            for block in ("peak_stationary", "mu_stationary"):
+                if self.has_mu or block == "peak_stationary":
+                    lbg[L.find(L.g, f"{block}[{tag}]")] = ubg[L.find(L.g, f"{block}[{tag}]")] = 0.0
+            rows = L.find(L.g, f"trough_handovers[{tag}]")
+            idle = np.ones(self.slots, bool)
+            idle[:len(seq)] = False
+            lbg[rows] = np.where(np.concatenate([idle, idle]), -np.inf, 0.0)
+        for name, criterion in self._criterion_blocks:
+            lower, upper = criterion.bounds(problem, tightening_deg)
+            lbg[L.find(L.g, name)], ubg[L.find(L.g, name)] = lower, upper
+        return lbg, ubg
+
+    def bounds(self, guess: dict, sequences) -> tuple[np.ndarray, np.ndarray]:
+        """Variable bounds: the design's bounds, windows around the start's angles, idle
+        slots fixed."""
         P, L = self.problem, self.layout
         lbx, ubx = np.full(self.n_x, -np.inf), np.full(self.n_x, np.inf)
         sl = L.find(L.x, "lengths")
         lbx[sl] = [P.design[k].lower / s for k, s in zip(self.free, self.scale)]
         ubx[sl] = [P.design[k].upper / s for k, s in zip(self.free, self.scale)]
         half_window = math.pi / self.n_curves
-        for block in L.x:
-            if block.name.startswith(("phi_peak", "phi_handover")):
-                sl = slice(block.start, block.start + block.size)
-                lbx[sl] = guess[block.name] - half_window
-                ubx[sl] = guess[block.name] + half_window
-            elif block.name.startswith("w_"):
-                sl = slice(block.start, block.start + block.size)
-                lbx[sl] = 0.0
+        for e, seq in zip(self.eccs, sequences):
+            tag = tag_of(e)
+            sl = L.find(L.x, f"phi_peak_{tag}")
+            lbx[sl], ubx[sl] = guess[f"phi_peak_{tag}"] - half_window, \
+                guess[f"phi_peak_{tag}"] + half_window
+            if self.has_mu:
+                sl = L.find(L.x, f"phi_mu_{tag}")
+                lbx[sl], ubx[sl] = guess[f"phi_mu_{tag}"] - half_window, \
+                    guess[f"phi_mu_{tag}"] + half_window
+            sl = L.find(L.x, f"phi_handover_{tag}")
+            centre = guess[f"phi_handover_{tag}"]
+            active = np.arange(self.slots) < len(seq)
+            lbx[sl] = np.where(active, centre - half_window, centre)
+            ubx[sl] = np.where(active, centre + half_window, centre)
+            lbx[L.find(L.x, f"w_{tag}")] = 0.0
         return lbx, ubx
 
     def at_window_bound(self, x, lbx, ubx, tol: float = 1e-6) -> bool:
-        """True when a tracked angle (peak or hand-over) ended on the edge of its window:
-        the point moved further than the window allows, so the driver re-centres and
-        re-solves."""
+        """True when a tracked angle (peak or hand-over) ended on the edge of its window: the
+        point moved further than the window allows, so the driver re-centres and re-solves."""
         for block in self.layout.x:
-            if block.name.startswith(("phi_peak", "phi_handover")):
-                sl = slice(block.start, block.start + block.size)
-                if np.any(x[sl] - lbx[sl] < tol) or np.any(ubx[sl] - x[sl] < tol):
+            if block.name.startswith(("phi_peak", "phi_handover", "phi_mu")):
+                sl = block.slice
+                free = ubx[sl] > lbx[sl]
+                if np.any(free & ((x[sl] - lbx[sl] < tol) | (ubx[sl] - x[sl] < tol))):
                     return True
         return False
 
@@ -286,9 +380,23 @@ class PhaseNLP:
     def pack(self, guess: dict) -> np.ndarray:
         x0 = np.zeros(self.n_x)
         for block in self.layout.x:
-            x0[block.start:block.start + block.size] = guess[block.name]
+            value = np.atleast_1d(np.asarray(guess[block.name], dtype=float))
+            x0[block.start:block.start + value.size] = value[:block.size]
         return x0
 
-    def unpack(self, x: np.ndarray) -> dict:
-        return {b.name: np.array(x[b.start:b.start + b.size]) for b in self.layout.x}
+    def worst_ripple(self, x, p) -> float:
+        """The surrogate's worst δ over the listed eccentricities at ``x``."""
+        ripples = np.array(self.surrogate(x, p)[0]).ravel()
+        return float(ripples[self.listed].max())
 
+    def binding(self, g, lbg, ubg) -> str:
+        """Name of the constraint block most violated at ``g`` ('' when none is)."""
+        viol = np.maximum(lbg - g, g - ubg)
+        viol[~np.isfinite(viol)] = 0
+        if viol.size == 0 or viol.max() <= 1e-6:
+            return ""
+        return self.layout.name_of(self.layout.g, int(np.argmax(viol)))
+
+    def multiplier(self, lam_g, name: str) -> float:
+        """d f*/d lower bound of block ``name`` (= -λ in CasADi's sign convention)."""
+        return -float(np.asarray(lam_g).ravel()[self.layout.find(self.layout.g, name)][0])

@@ -38,6 +38,10 @@ class PhaseResult:
     binding: str | None = None                   # the constraint that binds when infeasible
     message: str = ""
     regulation: list[dict] = field(default_factory=list)   # exact figures per eccentricity
+    #: the screening before IPOPT: designs screened, passed the filters, basins found,
+    #: basins polished, distinct optima among them
+    screening: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)            # seconds per stage
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -45,7 +49,7 @@ class PhaseResult:
 
 @dataclass
 class SolveResult:
-    """What ``optdesign solve`` writes to result.json (shared/DESIGN.md section 3)."""
+    """What ``optdesign solve`` writes to result.json (docs/contract.md)."""
 
     name: str
     status: str
@@ -63,6 +67,9 @@ class SolveResult:
     mechanism: str = ""
     input_speed: float = 0.0
     sections: dict = field(default_factory=dict)
+    #: wall time per stage, seconds: build (the NLPs), screening, ipopt, verification (the
+    #: exact checks and the accuracy report); what is left of solve_time_s is bookkeeping
+    timings_s: dict = field(default_factory=dict)
 
     def best_phase(self) -> PhaseResult | None:
         if self.design is None:

@@ -10,7 +10,7 @@ from optdesign.errors import AssemblyError
 from optdesign.exact import exact_figures
 from tests.conftest import PAPER
 
-W1 = 97.0   # rad/s: not in the paper; reproduces its table (shared/DESIGN.md 1.1)
+W1 = 97.0   # rad/s: not in the paper; reproduces its table (docs/papers.md)
 
 
 def test_paper_forward_stroke_table(paper_design):
@@ -37,14 +37,14 @@ def test_reverse_stroke_differs_from_paper(paper_design):
 
 
 def test_text_pin_layout_does_not_reproduce_the_paper():
-    """Eq. (2) to the letter (|AC_i| = l2') gives δ far from 0.376 (DESIGN.md 1.1)."""
+    """Eq. (2) to the letter (|AC_i| = l2') gives δ far from the paper's 0.376."""
     d = Design("fourbar_converter", dict(PAPER), {"pin_layout": "text"})
     f, _ = exact_figures(d, "forward", W1)
     assert abs(f.delta - 0.376) > 0.1
 
 
 def test_exact_agrees_with_a_very_fine_grid(paper_design):
-    """Relative error of δ <= 1e-6 against 2·10⁶ samples (issue 2 item 5). The grid's own error
+    """Relative error of δ <= 1e-6 against 2·10⁶ samples. The grid's own error
     at a kink is about half the slope jump times the step, < 1e-6 relative here."""
     f, _ = exact_figures(paper_design, "forward", W1)
     phi = np.linspace(0, 2 * np.pi, 2_000_000, endpoint=False)
@@ -143,5 +143,20 @@ def test_more_phases_less_ripple():
 ])
 def test_grashof_constraints(lengths, ok):
     from optdesign.mechanisms import get_mechanism
-    g = [float(v) for _, v in get_mechanism("fourbar_converter").grashof_constraints(lengths)]
+    from optdesign.problem import Constraints
+    criteria = get_mechanism("fourbar_converter").criteria(Constraints(grashof=True), {})
+    g = [float(c.formula(lengths)) for c in criteria if c.name.startswith("grashof")]
+    assert len(g) == 3
     assert (min(g) >= 0) is ok
+
+
+@pytest.mark.parametrize("layout,radius", [("collinear", 125.0), ("text", 100.0)])
+def test_pin_radius_follows_the_pin_layout(layout, radius):
+    """|AC_i| = l2 - l2' (collinear, the default) or l2' (eq. 2 to the letter): the mechanism
+    owns the formula, so a report never computes it from key names."""
+    from optdesign.mechanisms import get_mechanism
+    from optdesign.problem import Constraints
+    (pin,) = get_mechanism("fourbar_converter").criteria(Constraints(min_pin_radius=60),
+                                                         {"pin_layout": layout})
+    assert pin.formula(dict(l0=225, l1=20, l2=225, l2_prime=100, l3=56)) == radius
+    assert pin.bounds(None) == (60, float("inf"))

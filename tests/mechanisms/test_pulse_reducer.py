@@ -27,7 +27,7 @@ def design(**changes):
 
 
 def test_output_advances_4r_over_R_per_turn():
-    """Closed form (issue 6): Φ(2π) - Φ(0) = 4r/R, so the ratio is 4·r1/(2π·R1). The exact
+    """Closed form of eqs. (1)-(2): Φ(2π) - Φ(0) = 4r/R, so the ratio is 4·r1/(2π·R1). The exact
     evaluator sums angle increments: only rounding error, hence rel 1e-12."""
     f, _ = exact_figures(design(), "forward", W1)
     assert f.ratio == pytest.approx(4 * 5.0 / (2 * math.pi * 250.0), rel=1e-12)
@@ -143,9 +143,10 @@ def test_one_freewheel_is_intermittent():
 def test_design_constraint_is_r_below_one():
     mech = get_mechanism("pulse_reducer")
     p = {k: ca.SX(v) for k, v in PAPER.items() if k != "freewheels"}
-    (name, g), = mech.design_constraints(p, 2, Constraints(assembly_margin=1e-3))
-    assert name == "crank_inside_pivots"
-    assert float(ca.evalf(g)) == pytest.approx(1 - 0.1 - 1e-3, rel=1e-15)
+    (c,) = mech.criteria(Constraints(assembly_margin=1e-3), {})
+    assert c.name == "crank_inside_pivots"
+    assert float(ca.evalf(c.formula(p))) == pytest.approx(1 - 0.1, rel=1e-15)
+    assert c.bounds(None) == (1e-3, float("inf"))
 
 
 # ------------------------------------------------------------------ problem file and CLI

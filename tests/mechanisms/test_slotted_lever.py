@@ -129,10 +129,12 @@ def test_exact_agrees_with_a_very_fine_grid(stroke, n):
 
 def test_design_constraint_is_XD_beyond_L():
     mech = get_mechanism("slotted_lever")
-    g_of = dict(mech.design_constraints({"XD": ca.SX(XD), "L": ca.SX(L)}, 1,
-                                        Constraints(assembly_margin=1e-3)))
-    assert list(g_of) == ["pivot_outside_circle"]
-    assert float(ca.evalf(g_of["pivot_outside_circle"])) == pytest.approx(1 - L / XD - 1e-3)
+    (c,) = mech.criteria(Constraints(assembly_margin=1e-3), {})
+    assert c.name == "pivot_outside_circle"
+    g = c.formula({"XD": ca.SX(XD), "L": ca.SX(L)})
+    assert float(ca.evalf(g)) == pytest.approx(1 - L / XD)
+    assert c.bounds(None) == (1e-3, float("inf"))
+    assert c.formula({"XD": XD, "L": L}) == pytest.approx(1 - L / XD)   # the same formula
 
 
 # ------------------------------------------------------------------ problem file and CLI

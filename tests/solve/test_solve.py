@@ -30,7 +30,7 @@ def disc_result():
 
 
 def test_disc_problem_halves_the_papers_ripple(disc_result):
-    """Issue 3 target: the paper's disc (pin radius >= 125 mm kept), μ >= 40°, ratio >= 0.344:
+    """The disc problem: the paper's disc (pin radius >= 125 mm kept), μ >= 40°, ratio >= 0.344:
     δ at least halved from the paper's 0.376, ratio not lower."""
     r = disc_result
     assert r.status == "optimal"

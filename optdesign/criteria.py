@@ -1,0 +1,235 @@
+"""Objectives and constraints as objects: each owns its expression, its bounds and its check.
+
+One object per criterion states the same quantity twice over one interface: symbolically, over
+the NLP's named quantities (:class:`optdesign.solve.nlp.Quantities`: ``lengths``, ``ratio``,
+``worst_ripple``, ``peak_speed``, ``cos_mu_sq``), and exactly, over a :class:`Measured` view of
+an :class:`~optdesign.evaluation.Evaluation` with the same names. The NLP, the verification, the
+start ranking and the reports iterate over :func:`constraints_of` and :func:`objective_of`; a
+new criterion is one class here (or in its mechanism or section) and nothing else.
+
+Convention, stated once: every constraint is ``lower <= value <= upper``; its bounds are
+computed anew for every solve (a Pareto sweep's ε is a bound, not a rebuild of the NLP).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+#: weight of the worst ripple in the largest-ratio objective: a lexicographic tie-break that
+#: keeps w_hi and w_lo tight when the ripple cap is slack (the surrogate δ stays exact) for
+#: at most ~1e-6 of ratio
+RIPPLE_TIE_BREAK = 1e-6
+#: tolerances of the exact check: a constraint violated by less is taken as met
+TOL_ANGLE_DEG = 1e-3
+TOL_RATIO = 1e-7
+#: length constraints, relative to the design's longest length: 4e-5 mm at 400 mm, far below
+#: any manufacturing tolerance, and the same in any unit
+TOL_LENGTH_REL = 1e-7
+
+
+@dataclass(frozen=True)
+class Measured:
+    """The NLP's named quantities, measured exactly on one evaluated design."""
+
+    lengths: Mapping[str, float]
+    ratio: float
+    worst_ripple: float
+    peak_speed: float                 # ω_max of the problem's stroke at e = 1, rad/s
+    min_angle_deg: float
+    evaluation: Any
+
+    @classmethod
+    def of(cls, problem, ev) -> "Measured":
+        lengths = {k: float(ev.design.values[k]) for k in problem.model.lengths}
+        listed = problem.eccentricities
+        return cls(lengths, ev.ratio, ev.ripple(problem.objective.ripple, listed),
+                   ev.figures.omega_max, ev.min_angle_deg, ev)
+
+
+# --------------------------------------------------------------------------- constraints
+class Constraint:
+    """``lower <= value(q) <= upper`` on the NLP's quantities and on a measured design."""
+
+    name: str = ""
+    unit: str = ""
+
+    def rows(self, q) -> list[tuple[str, Any]]:
+        """(block name, CasADi expression) pairs for the NLP."""
+        return [(self.name, self.value(q))]
+
+    def value(self, q):
+        raise NotImplementedError
+
+    def bounds(self, problem, tightening_deg: float = 0.0) -> tuple[float, float]:
+        raise NotImplementedError
+
+    def tolerance(self, m: Measured) -> float:
+        return TOL_RATIO
+
+    def violation(self, problem, m: Measured) -> float:
+        """How far the exact value lies outside the bounds (<= 0 when met)."""
+        lower, upper = self.bounds(problem)
+        v = self.value(m)
+        values = v if isinstance(v, (list, tuple)) else [v]
+        return max(max(lower - float(x), float(x) - upper) for x in values)
+
+    def report(self, problem, m: Measured) -> dict:
+        """Columns of this criterion in a result row."""
+        return {}
+
+
+class TransmissionAngle(Constraint):
+    """min(μ, 180° - μ) >= μ_min of every chain over the whole turn, as |cos μ| <= cos μ_min
+    at the NLP's samples (squared, so both toggle sides are one smooth row), tightened by the
+    deficit the exact check finds between samples; assembly with a margin, 1 - cos²μ >= m."""
+
+    name = "transmission_angle"
+    unit = "deg"
+
+    def rows(self, q):
+        return [(f"{self.name}[{tag}]", cos_sq) for tag, cos_sq in q.cos_mu_sq.items()]
+
+    def bounds(self, problem, tightening_deg=0.0):
+        c = problem.constraints
+        mu = min(c.min_transmission_angle_deg + tightening_deg, 89.0) \
+            if c.min_transmission_angle_deg > 0 else 0.0
+        return -math.inf, min(math.cos(math.radians(mu)) ** 2, 1.0 - c.assembly_margin)
+
+    def violation(self, problem, m):
+        return problem.constraints.min_transmission_angle_deg - m.min_angle_deg
+
+    def tolerance(self, m):
+        return TOL_ANGLE_DEG
+
+    def report(self, problem, m):
+        return {"min_transmission_angle_deg": m.min_angle_deg}
+
+
+class RatioFloor(Constraint):
+    """ratio >= min_ratio (the ε of a Pareto sweep)."""
+
+    name = "min_ratio"
+
+    def value(self, q):
+        return q.ratio
+
+    def bounds(self, problem, tightening_deg=0.0):
+        return problem.objective.min_ratio, math.inf
+
+
+class RippleCap(Constraint):
+    """worst δ <= max_ripple, with the largest-ratio objective."""
+
+    name = "max_ripple"
+
+    def value(self, q):
+        return q.worst_ripple
+
+    def bounds(self, problem, tightening_deg=0.0):
+        return -math.inf, problem.objective.max_ripple
+
+
+class LengthConstraint(Constraint):
+    """A constraint on the lengths alone, with one formula for symbols and numbers:
+    ``formula(lengths)`` uses arithmetic only. Mechanisms contribute these."""
+
+    def __init__(self, name: str, formula, lower: float = 0.0, upper: float = math.inf,
+                 column: str | None = None):
+        self.name, self.formula, self.lower, self.upper = name, formula, lower, upper
+        self.column = column
+
+    def value(self, q):
+        return self.formula(q.lengths)
+
+    def bounds(self, problem, tightening_deg=0.0):
+        return self.lower, self.upper
+
+    def tolerance(self, m):
+        return TOL_LENGTH_REL * max(abs(v) for v in m.lengths.values())
+
+    def report(self, problem, m):
+        return {self.column: float(self.value(m))} if self.column else {}
+
+
+class SectionConstraint(Constraint):
+    """A constraint a problem-file section contributes (e.g. the driveline's speed limit):
+    the section gives the symbolic rows from the peak output speed and checks the design."""
+
+    def __init__(self, key: str, section, problem):
+        self.key, self.section, self.problem = key, section, problem
+        self.name = key
+
+    def rows(self, q):
+        return [(f"{self.key}.{name}", g) for name, g in
+                self.section.solve_constraints(self.problem, q.peak_speed)]
+
+    def bounds(self, problem, tightening_deg=0.0):
+        return 0.0, math.inf
+
+    def violation(self, problem, m):
+        return math.inf if self.section.verify(problem, m.evaluation) else -math.inf
+
+    def message(self, problem, m) -> str:
+        return self.section.verify(problem, m.evaluation) or ""
+
+
+def constraints_of(problem) -> list[Constraint]:
+    """Every constraint of a problem: the general ones, the mechanism's, the sections'."""
+    out: list[Constraint] = [TransmissionAngle(), RatioFloor()]
+    if problem.objective.max_ripple is not None and problem.objective.minimize == "-ratio":
+        out.append(RippleCap())
+    out += problem.model.criteria(problem.constraints, problem.options)
+    for key, section in problem.sections.items():
+        if hasattr(section, "solve_constraints"):
+            out.append(SectionConstraint(key, section, problem))
+    return out
+
+
+# --------------------------------------------------------------------------- objectives
+class Objective:
+    """What the NLP minimises, and the key that ranks verified designs (lower is better)."""
+
+    name: str = ""
+
+    def expression(self, q):
+        raise NotImplementedError
+
+    def rank(self, delta: float, ratio: float) -> float:
+        """The ranking key of a design with worst ripple ``delta`` and ratio ``ratio``."""
+        raise NotImplementedError
+
+    def key(self, m: Measured) -> float:
+        return self.rank(m.worst_ripple, m.ratio)
+
+
+class LeastRipple(Objective):
+    """The worst δ over the listed eccentricities."""
+
+    name = "ripple"
+
+    def expression(self, q):
+        return q.worst_ripple
+
+    def rank(self, delta, ratio):
+        return delta
+
+
+class LargestRatio(Objective):
+    """The ratio, under the ripple cap; the worst δ breaks ties lexicographically."""
+
+    name = "-ratio"
+
+    def expression(self, q):
+        return -q.ratio + RIPPLE_TIE_BREAK * q.worst_ripple
+
+    def rank(self, delta, ratio):
+        return -ratio
+
+
+#: the objectives ``objective.minimize`` may name
+OBJECTIVES: dict[str, type[Objective]] = {"ripple": LeastRipple, "-ratio": LargestRatio}
+
+
+def objective_of(problem) -> Objective:
+    return OBJECTIVES[problem.objective.minimize]()

@@ -1,0 +1,142 @@
+"""One exact evaluation of a design: every figure a check, a report or a start guess reads.
+
+Per eccentricity the design is sampled once, on the exact evaluator's search grid; from that one
+sampling come the assembly check, the exact output figures of each stroke asked for (crossings
+and stationary points by Brent's method, :mod:`optdesign.exact`), the envelope's hand-over
+structure, the angles of the rocker curves' peaks, and the least transmission angle of every
+chain. Verification (:mod:`optdesign.solve.verify`), ``analyze`` and the solver's start guess
+read it instead of sampling the design again.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .design import Design
+from .envelope import StrokeFigures, driving_speeds
+from .errors import AssemblyError, ProblemError
+from .exact import DEFAULT_GRID, Run, exact_figures, search_grid
+
+
+@dataclass
+class EccentricityEvaluation:
+    """The exact figures of a design at one eccentricity fraction e."""
+
+    eccentricity: float
+    figures: dict[str, StrokeFigures]        # per stroke
+    runs: list[Run]                          # hand-overs of the evaluated (problem's) stroke
+    peak_angles: np.ndarray                  # grid angle of each driving curve's maximum
+    chain_angles_deg: np.ndarray             # least transmission angle of every chain
+    cos_extreme_angles: np.ndarray           # grid angles of max cos μ, then min cos μ, per chain
+
+    @property
+    def sequence(self) -> tuple[int, ...]:
+        """Which curve drives on each run, in crank order (the NLP's hand-over structure)."""
+        return tuple(r.curve for r in self.runs)
+
+    @property
+    def handovers(self) -> np.ndarray:
+        return np.array([r.start for r in self.runs])
+
+    @property
+    def min_angle_deg(self) -> float:
+        return float(self.chain_angles_deg.min())
+
+
+@dataclass
+class Evaluation:
+    """A design evaluated exactly at e = 1 (where the ratio is defined) and the listed e.
+
+    ``failure`` holds the reason when the design does not assemble (or its values make no
+    sense to the mechanism); nothing is evaluated past the first eccentricity that fails.
+    """
+
+    design: Design
+    stroke: str
+    input_speed: float
+    per_e: list[EccentricityEvaluation] = field(default_factory=list)
+    failure: AssemblyError | ProblemError | None = None
+    failed_eccentricity: float | None = None
+
+    @property
+    def assembles(self) -> bool:
+        return self.failure is None
+
+    @property
+    def eccentricities(self) -> tuple[float, ...]:
+        return tuple(x.eccentricity for x in self.per_e)
+
+    def at(self, eccentricity: float) -> EccentricityEvaluation:
+        return next(x for x in self.per_e if x.eccentricity == eccentricity)
+
+    @property
+    def strokes(self) -> dict[str, StrokeFigures]:
+        """Figures of every evaluated stroke at e = 1 (what a section reads of ``analyze``)."""
+        return self.at(1.0).figures if self.assembles else {}
+
+    @property
+    def figures(self) -> StrokeFigures:
+        """Figures of the problem's stroke at e = 1."""
+        return self.at(1.0).figures[self.stroke]
+
+    @property
+    def ratio(self) -> float:
+        return self.figures.ratio
+
+    def ripple(self, definition: str, eccentricities) -> float:
+        """Worst δ of the problem's stroke over ``eccentricities``."""
+        return max(self.at(e).figures[self.stroke].ripple(definition) for e in eccentricities)
+
+    @property
+    def min_angle_deg(self) -> float:
+        return min(x.min_angle_deg for x in self.per_e)
+
+
+def eccentricities_of(problem) -> tuple[float, ...]:
+    """e = 1 first (where the ratio is defined), then the other listed fractions."""
+    return (1.0,) + tuple(e for e in problem.eccentricities if e != 1.0)
+
+
+def evaluate(design: Design, stroke: str, input_speed: float,
+             eccentricities=(1.0,), strokes: tuple[str, ...] | None = None,
+             n_grid: int = DEFAULT_GRID) -> Evaluation:
+    """Evaluate ``design`` once per eccentricity (``eccentricities`` should start with 1).
+
+    ``strokes`` lists the strokes whose figures are wanted (default: ``stroke`` alone); the
+    hand-over runs are those of ``stroke``.
+    """
+    strokes = strokes or (stroke,)
+    ev = Evaluation(design, stroke, input_speed)
+    try:
+        design.model.check_values(design.values, design.count)
+    except ProblemError as exc:
+        ev.failure = exc
+        return ev
+    for e in eccentricities:
+        phi = search_grid(design, e, n_grid)
+        sampled = design.sample(phi, e)
+        try:
+            design.check_assembly(e, phi=phi, cos_mu=sampled["cos_mu"])
+        except AssemblyError as exc:
+            ev.failure, ev.failed_eccentricity = exc, e
+            return ev
+        figures, runs = {}, []
+        for s in strokes:
+            figures[s], r = exact_figures(design, s, input_speed, e, phi=phi, sampled=sampled)
+            if s == stroke:
+                runs = r
+        speeds = driving_speeds(sampled["dtheta"], stroke)
+        angles = design.transmission_angles(e, phi=phi, cos_mu=sampled["cos_mu"])
+        cos_mu = sampled["cos_mu"]
+        extremes = np.concatenate([phi[np.argmax(cos_mu, axis=1)], phi[np.argmin(cos_mu, axis=1)]])
+        ev.per_e.append(EccentricityEvaluation(e, figures, runs, phi[np.argmax(speeds, axis=1)],
+                                               angles, extremes))
+    return ev
+
+
+def evaluate_problem(problem, values=None, strokes: tuple[str, ...] | None = None) -> Evaluation:
+    """:func:`evaluate` of the problem's design (or ``values``) at its eccentricities."""
+    design = Design.from_problem(problem, values)
+    return evaluate(design, problem.stroke, problem.input_speed, eccentricities_of(problem),
+                    strokes)

@@ -25,6 +25,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .criteria import objective_of
 from .design import Design
 from .envelope import StrokeFigures, output_envelope, sampled_figures
 from .exact import DEFAULT_GRID, exact_figures
@@ -201,8 +202,8 @@ def solve_rows(problem, settings=SOLVE_SETTINGS, reference=SOLVE_REFERENCE):
     # Reference: the best verified optimum of every setting (the tightest one included): a
     # multistart may stop at a slightly worse local optimum, whatever its sampling.
     verified = [r for _, _, r, ok in runs if ok]
-    ref = (min(verified, key=lambda r: r.delta) if problem.objective.minimize == "ripple"
-           else max(verified, key=lambda r: r.ratio)) if verified else runs[0][2]
+    rank = objective_of(problem).rank
+    ref = min(verified, key=lambda r: rank(r.delta, r.ratio)) if verified else runs[0][2]
     rows = []
     for n, rho, r, ok in runs:
         gap = r.best_phase().surrogate_gap if r.best_phase() else None

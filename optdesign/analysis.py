@@ -7,8 +7,8 @@ import numpy as np
 
 from .design import Design
 from .envelope import StrokeFigures
-from .errors import AssemblyError
-from .exact import exact_figures
+from .errors import ProblemError
+from .evaluation import evaluate
 
 
 @dataclass
@@ -62,24 +62,25 @@ def analyze(problem, values: dict | None = None) -> AnalysisResult:
                             mechanism=problem.mechanism, input_speed=problem.input_speed)
     result.design[mech.count_variable] = design.count
     eccentricities = sorted(set(problem.eccentricities) | {1.0}, reverse=True)
-    for e in eccentricities:
-        try:
-            design.check_assembly(e)
-        except AssemblyError as exc:
-            result.assembles = False
-            result.failure = {"chain": exc.chain, "phi_deg": exc.phi_deg, "eccentricity": e,
-                              "message": str(exc)}
-            return result
-        angles = transmission_angles(design, e)
-        strokes = {s: exact_figures(design, s, problem.input_speed, e)[0] for s in mech.strokes}
-        if e == 1.0:
-            result.strokes = strokes
+    ev = evaluate(design, problem.stroke, problem.input_speed, eccentricities, mech.strokes)
+    if isinstance(ev.failure, ProblemError):
+        raise ev.failure
+    if ev.failure is not None:
+        exc = ev.failure
+        result.assembles = False
+        result.failure = {"chain": exc.chain, "phi_deg": exc.phi_deg,
+                          "eccentricity": ev.failed_eccentricity, "message": str(exc)}
+        return result
+    for x in ev.per_e:
+        angles = x.chain_angles_deg
+        if x.eccentricity == 1.0:
+            result.strokes = x.figures
             result.chains_min_transmission_angle_deg = [float(a) for a in angles]
             result.min_transmission_angle_deg = float(angles.min())
-        if e in problem.eccentricities:
-            result.regulation.append({"eccentricity": e,
+        if x.eccentricity in problem.eccentricities:
+            result.regulation.append({"eccentricity": x.eccentricity,
                                       "min_transmission_angle_deg": float(angles.min()),
-                                      "strokes": {k: v.to_dict() for k, v in strokes.items()}})
+                                      "strokes": {k: v.to_dict() for k, v in x.figures.items()}})
     for key, section in problem.sections.items():
         if hasattr(section, "analyze"):
             result.sections[key] = section.analyze(problem, result)

@@ -70,9 +70,9 @@ class Design:
 
     def at(self, phi: float, eccentricity: float = 1.0) -> dict[str, np.ndarray]:
         """The same at one crank angle (vectors over chains)."""
-        out = self.function()(float(phi), self.p(eccentricity))
-        return {k: np.array(v).ravel()
-                for k, v in zip(("theta", "dtheta", "ddtheta", "cos_mu"), out)}
+        out = np.array(self.model.packed(self.count, self.option_key)(
+            float(phi), self.p(eccentricity))).ravel()
+        return dict(zip(("theta", "dtheta", "ddtheta", "cos_mu"), out.reshape(4, -1)))
 
     def cos_peaks(self, phi: np.ndarray, eccentricity: float = 1.0,
                   cos_mu: np.ndarray | None = None, near: float = 1e-3):

@@ -111,6 +111,16 @@ class Mechanism(ABC):
                            ["phi", "p"], ["theta", "dtheta", "ddtheta", "cos_mu"])
 
     @lru_cache(maxsize=64)
+    def packed(self, count: int, options: tuple[tuple[str, str], ...] = ()) -> ca.Function:
+        """:meth:`kinematics` with its four outputs stacked in one column [θ; dθ; d²θ; cos μ]:
+        one conversion to NumPy per call, for the exact evaluator's many single angles."""
+        full = self.kinematics(count, options)
+        phi = ca.SX.sym("phi")
+        pvec = ca.SX.sym("p", len(self.lengths))
+        return ca.Function(f"{self.name}_packed_n{count}", [phi, pvec],
+                           [ca.vertcat(*full.call([phi, pvec], True, False))])
+
+    @lru_cache(maxsize=64)
     def speeds(self, count: int, options: tuple[tuple[str, str], ...] = ()) -> ca.Function:
         """``casadi.Function`` (phi, p) -> (dtheta, cos_mu): the lean part of
         :meth:`kinematics` that screening thousands of designs needs."""

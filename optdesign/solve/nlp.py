@@ -158,6 +158,13 @@ class PhaseNLP:
         return ca.Function("sample", [phi, pv, inv_e],
                            [cos_mu ** 2, smooth_max(f, self.problem.solver.smoothing), f])
 
+    @staticmethod
+    def _slot_function(fn) -> ca.Function:
+        """(φ, p) -> (θ, dθ/dφ) of every chain: what a hand-over slot reads, and no more."""
+        phi, pv = ca.SX.sym("phi"), ca.SX.sym("p", fn.size1_in(1))
+        theta, dtheta, _, _ = fn.call([phi, pv], True, False)
+        return ca.Function("slot", [phi, pv], [theta, dtheta])
+
     def _points_function(self) -> ca.Function:
         """(φ_peak (curves), φ_μ (2 per chain), p, 1/e) -> (f_c and f_c' at each curve's peak
         angle, cos μ and d cos μ/dφ at each chain's two extreme angles): one SX function in
@@ -213,7 +220,7 @@ class PhaseNLP:
 
         sample_map = self._sample_function(fn).map(N)
         points = self._points_function()
-        slot_map = fn.map(M)
+        slot_map = self._slot_function(fn).map(M)
         ripples, means, peaks, cos_sq = [], [], [], {}
         for e in self.eccs:
             tag = tag_of(e)
@@ -246,7 +253,7 @@ class PhaseNLP:
             after = parameter(f"after_{tag}", C + 1, M)
             active = parameter(f"active_{tag}", M)
             last = parameter(f"last_{tag}", M)
-            th_x, dth_x, _, _ = slot_map(phi_x.T, pvec)
+            th_x, dth_x = slot_map(phi_x.T, pvec)
             f_x, th = self._stack(dth_x / e), self._stack(th_x)
             g_rows.append((f"trough_handovers[{tag}]",
                            ca.vertcat(ca.sum1(before * f_x).T - w_lo,

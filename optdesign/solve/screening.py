@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.stats import qmc
 
-from ..criteria import LengthConstraint, constraints_of
+from ..criteria import SectionConstraint, TransmissionAngle, constraints_of, objective_of
 from ..envelope import driving_speeds
 from ..evaluation import eccentricities_of
 from ..mechanisms import STROKE_SIGNS
@@ -122,25 +122,20 @@ def _evaluate(problem, count, base, free, X) -> tuple[np.ndarray, np.ndarray]:
             if e in problem.eccentricities:
                 ripples.append((hi - lo) / avg)
             if e == 1.0:
-                ratio = mean
+                ratio, peak = mean, hi
             worst_cos = np.abs(cos_mu).reshape(n, S, N).max(axis=(0, 2))
             bad = ~np.isfinite(worst_cos) | ~np.all(np.isfinite(f), axis=(0, 2)) | \
                 (worst_cos > 1.0)
             violation = np.maximum(violation, np.where(bad, np.inf, worst_cos - cos_limit))
-        worst_ripple = np.max(ripples, axis=0)
-        violation = np.maximum(violation, problem.objective.min_ratio - ratio)
+        q = _Sampled(lengths, ratio, np.max(ripples, axis=0), peak * problem.input_speed)
         for criterion in constraints_of(problem):
-            if isinstance(criterion, LengthConstraint):
-                lo_b, up_b = criterion.bounds(problem)
-                v = np.asarray(criterion.value(_Lengths(lengths)), dtype=float)
-                violation = np.maximum(violation, np.maximum(lo_b - v, v - up_b) /
-                                       max(1.0, abs(lo_b) if math.isfinite(lo_b) else 1.0))
-        if problem.objective.minimize == "ripple":
-            score = worst_ripple
-        else:
-            cap = problem.objective.max_ripple
-            violation = np.maximum(violation, worst_ripple - cap)
-            score = -ratio
+            if isinstance(criterion, (TransmissionAngle, SectionConstraint)):
+                continue        # the angle is filtered above, with slack; sections at the check
+            lower, upper = criterion.bounds(problem)
+            v = np.asarray(criterion.value(q), dtype=float)
+            scale = max([1.0] + [abs(b) for b in (lower, upper) if math.isfinite(b)])
+            violation = np.maximum(violation, np.maximum(lower - v, v - upper) / scale)
+        score = objective_of(problem).rank(q.worst_ripple, q.ratio)
     violation = np.where(np.isnan(violation), np.inf, violation)
     score = np.where(np.isfinite(score), score, np.inf)
     return score, violation
@@ -162,11 +157,14 @@ def _crossings(f: np.ndarray) -> np.ndarray:
     return np.where(a != b, value, np.inf)
 
 
-class _Lengths:
-    """Arrays of lengths shaped like the NLP's quantities, for the length constraints."""
+@dataclass
+class _Sampled:
+    """The NLP's named quantities, as arrays over the screened designs (sampled)."""
 
-    def __init__(self, lengths):
-        self.lengths = lengths
+    lengths: dict
+    ratio: np.ndarray
+    worst_ripple: np.ndarray
+    peak_speed: np.ndarray
 
 
 def _basins(candidates: list[Candidate], d: int) -> tuple[list[Candidate], float]:

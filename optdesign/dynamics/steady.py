@@ -114,10 +114,45 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
     model = DriveModel(design, problem.stroke, problem.input_speed, section, problem.source)
     integ = Integrator(model, method, section.rtol, section.atol)
     clock = time.perf_counter()
+    approach = _to_steady(model, integ, section)
+    cycle = _record_cycle(model, integ, approach, samples)
+    wall = time.perf_counter() - clock
+    kinematic, _ = exact_figures(design, problem.stroke, problem.input_speed)
+    return _result(problem, section, method, model, integ, approach, cycle, kinematic, wall)
+
+
+@dataclass
+class _Approach:
+    """The turns run until the cycle repeats: where the recorded turn starts."""
+
+    y: np.ndarray
+    mode: Mode
+    lead: int
+    turns: int
+    steady: bool
+    residual: float
+    first_turn: dict | None
+
+
+@dataclass
+class _Cycle:
+    """The recorded steady turn: the trace and what it sums to."""
+
+    start: np.ndarray
+    y_end: np.ndarray
+    events: list
+    period: float
+    t: np.ndarray
+    ys: np.ndarray
+    eps: np.ndarray
+    engaged: np.ndarray
+
+
+def _to_steady(model: DriveModel, integ: Integrator, section) -> _Approach:
+    """Whole turns until two consecutive turns agree to ``steady_tol`` (or ``cycles`` - 1)."""
     y, mode = _initial_state(model)
     lead = int(np.argmax(mode.engaged))
-    previous, residual, steady, turns = None, np.inf, False, 0
-    first_turn = None
+    previous, residual, steady, turns, first_turn = None, np.inf, False, 0, None
     while turns < section.cycles - 1:          # the last allowed turn is the recorded one
         y_end, mode, events, period = integ.run_turn(y, mode)
         turns += 1
@@ -131,33 +166,43 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
                 steady = True
                 break
         previous = signature
-    trace = Trace()
-    start = y.copy()
-    y_end, mode_end, events, period = integ.run_turn(y, mode, trace, samples)
-    turns += 1
-    wall = time.perf_counter() - clock
+    return _Approach(y, mode, lead, turns, steady, residual, first_turn)
 
-    t = np.asarray(trace.t)
+
+def _record_cycle(model: DriveModel, integ: Integrator, approach: _Approach,
+                  samples: int) -> _Cycle:
+    """One more turn with dense output: the steady cycle as recorded."""
+    trace = Trace()
+    start = approach.y.copy()
+    y_end, _, events, period = integ.run_turn(approach.y, approach.mode, trace, samples)
+    approach.turns += 1
     ys = np.asarray(trace.y).T
     # an output at rest stopped at ψ̇ = -η·ω1 (the event's offset): show it at 0
     ys[3] = np.where((ys[3] < 0) & (ys[3] > -1e-9 * model.input_speed), 0.0, ys[3])
-    eps = np.asarray(trace.eps).T
-    engaged = np.asarray(trace.engaged).T
+    return _Cycle(start, y_end, events, period, np.asarray(trace.t), ys,
+                  np.asarray(trace.eps).T, np.asarray(trace.engaged).T)
+
+
+def _result(problem, section, method, model, integ, approach: _Approach, cycle: _Cycle,
+            kinematic, wall: float) -> SimulationResult:
+    """The figures of the recorded cycle (dynamic δ, ratio, power balance, instants)."""
+    ys, start, y_end, period, events = cycle.ys, cycle.start, cycle.y_end, cycle.period, \
+        cycle.events
     omega_in_mean = TWO_PI / period
     omega_out_mean = (y_end[2] - start[2]) / period
     dynamic = StrokeFigures.from_extremes(ys[3].max(), ys[3].min(), omega_out_mean,
                                           omega_in_mean)
-    kinematic, _ = exact_figures(design, problem.stroke, problem.input_speed)
-    eps_engaged = np.where(engaged, eps, -np.inf)
+    eps_engaged = np.where(cycle.engaged, cycle.eps, -np.inf)
     eps_max = max([float(eps_engaged.max())] + [e.eps for e in events if e.kind == "eps_max"])
     c = integ.counters
     labels = model.labels()
     return SimulationResult(
         name=problem.name, mechanism=problem.mechanism, freewheel=section.freewheel,
         crank=section.crank, method=method, rtol=section.rtol, atol=section.atol,
-        steady=steady, steady_residual=float(residual), cycles=turns,
-        cycle_time_s=float(period), omega_in_mean=float(omega_in_mean),
-        omega_out_mean=float(omega_out_mean), ratio=float(omega_out_mean / omega_in_mean),
+        steady=approach.steady, steady_residual=float(approach.residual),
+        cycles=approach.turns, cycle_time_s=float(period),
+        omega_in_mean=float(omega_in_mean), omega_out_mean=float(omega_out_mean),
+        ratio=float(omega_out_mean / omega_in_mean),
         dynamic=dynamic, kinematic=kinematic, eps_max=eps_max,
         power_in_w=float((y_end[4] - start[4]) / period),
         power_out_w=float((y_end[5] - start[5]) / period),
@@ -165,13 +210,13 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
         counters={"nfev": c.nfev, "njev": c.njev, "nlu": c.nlu, "segments": c.segments,
                   "steady_cycle_events": sum(e.kind != "eps_max" for e in events)},
         wall_time_s=wall, instants=_instants(events, period, labels),
-        first_turn=first_turn or _first_turn(events, labels, lead),
+        first_turn=approach.first_turn or _first_turn(events, labels, approach.lead),
         switches=[{"t_s": float(e.t), "phi_deg": float(np.degrees(e.phi)), "kind": e.kind,
                    "freewheel": labels[e.wheel] if e.wheel >= 0 else None, "eps": e.eps}
                   for e in events],
         labels=labels,
-        trace={"t": t, "phi": ys[0], "omega_in": ys[1], "psi": ys[2] - start[2],
-               "omega_out": ys[3], "eps": eps, "engaged": engaged,
+        trace={"t": cycle.t, "phi": ys[0], "omega_in": ys[1], "psi": ys[2] - start[2],
+               "omega_out": ys[3], "eps": cycle.eps, "engaged": cycle.engaged,
                "holder_speed": _holder_speeds(model, ys)})
 
 

@@ -142,38 +142,80 @@ def sweep(problem, out_dir, points: int | None = None, workers: int | None = Non
     scheduler : str or distributed.Client, optional
         Run the tasks on this Dask cluster instead of local processes.
     """
-    t0 = time.perf_counter()
-    section = problem.sections.get("pareto") or ParetoSection(source=problem.source)
-    n_points = points or section.points or DEFAULT_POINTS
-    counts = list(section.counts or problem.counts())
-    settings = {"problem": problem.source,
-                "problem_sha256": hashlib.sha256(repr(problem).encode()).hexdigest(),
-                "points": n_points, "counts": counts,
-                "ratio_lower": section.ratio_lower, "ratio_upper": section.ratio_upper}
-    out = Path(out_dir)
-    journal = Journal(out / "points.jsonl")
-    done = {tuple(r["key"]): r for r in journal.start(settings, resume)}
-    n_resumed = len(done)
-    ex = _executor(workers, scheduler)
-    n_workers = workers or os.cpu_count() or 1
-    n_chains = max(2, -(-n_workers // max(1, len(counts))))
-    from tqdm import tqdm
-    bar = tqdm(total=len(counts) * (n_points + 2), initial=n_resumed, desc="pareto",
-               unit="point", file=sys.stderr, disable=None if progress else True,
-               dynamic_ncols=True)
-    running: dict = {}            # future -> (count, chain or None)
-    chains: dict = {}             # (count, j) -> {"order": [...], "pos": int, "start": values}
+    run = _Sweep(problem, out_dir, points, workers, resume, scheduler, progress)
+    return run.run()
 
-    def finish(rec):
-        rec["finished_s"] = time.perf_counter() - t0      # since this run started
-        done[tuple(rec["key"])] = rec
-        journal.append(rec)
-        bar.update(1)
 
-    def submit_chain(count, j):
-        c = chains[(count, j)]
-        while c["pos"] < len(c["order"]) and (count, c["order"][c["pos"]]) in done:
-            prev = done[(count, c["order"][c["pos"]])]
+class _Sweep:
+    """One sweep's state: the journal of finished points, the chains of ε points in flight,
+    the executor and the progress bar; each step a method."""
+
+    def __init__(self, problem, out_dir, points, workers, resume, scheduler, progress):
+        self.t0 = time.perf_counter()
+        self.problem, self.scheduler = problem, scheduler
+        self.section = problem.sections.get("pareto") or ParetoSection(source=problem.source)
+        self.n_points = points or self.section.points or DEFAULT_POINTS
+        self.counts = list(self.section.counts or problem.counts())
+        self.settings = {"problem": problem.source,
+                         "problem_sha256": hashlib.sha256(repr(problem).encode()).hexdigest(),
+                         "points": self.n_points, "counts": self.counts,
+                         "ratio_lower": self.section.ratio_lower,
+                         "ratio_upper": self.section.ratio_upper}
+        self.out = Path(out_dir)
+        self.journal = Journal(self.out / "points.jsonl")
+        self.done = {tuple(r["key"]): r for r in self.journal.start(self.settings, resume)}
+        self.n_resumed = len(self.done)
+        self.ex = _executor(workers, scheduler)
+        self.n_workers = workers or os.cpu_count() or 1
+        self.n_chains = max(2, -(-self.n_workers // max(1, len(self.counts))))
+        from tqdm import tqdm
+        self.bar = tqdm(total=len(self.counts) * (self.n_points + 2), initial=self.n_resumed,
+                        desc="pareto", unit="point", file=sys.stderr,
+                        disable=None if progress else True, dynamic_ncols=True)
+        self.running: dict = {}       # future -> (count, chain or None)
+        self.chains: dict = {}        # (count, j) -> {"order", "pos", "start", "eps", "ends"}
+
+    def run(self) -> ParetoResult:
+        interrupted = True
+        try:
+            for n in self.counts:
+                missing = [k for k in ENDS if (n, k) not in self.done]
+                for k in missing:
+                    self.running[self.ex.submit(worker.solve_end, self.problem, n, k)] = (n, None)
+                if not missing:
+                    self.open_count(n)
+            while self.running:
+                for fut in self.ex.wait_any(list(self.running)):
+                    count, j = self.running.pop(fut)
+                    self.finish(fut.result())
+                    if j is None:
+                        if all((count, k) in self.done for k in ENDS):
+                            self.open_count(count)
+                    else:
+                        self.submit_chain(count, j)
+                    _rebuild(self.problem, self.done, self.out, self.settings)
+            interrupted = False
+        finally:
+            self.bar.close()
+            self.ex.close(interrupted)
+        result = _rebuild(self.problem, self.done, self.out, self.settings)
+        result.run.update({"wall_time_s": time.perf_counter() - self.t0,
+                           "resumed_points": self.n_resumed,
+                           "workers": "dask" if self.scheduler is not None else self.n_workers})
+        write_front(result, self.out)
+        return result
+
+    def finish(self, rec: dict) -> None:
+        rec["finished_s"] = time.perf_counter() - self.t0      # since this run started
+        self.done[tuple(rec["key"])] = rec
+        self.journal.append(rec)
+        self.bar.update(1)
+
+    def submit_chain(self, count: int, j: int) -> None:
+        """The chain's next unfinished point, warm-started from its last feasible design."""
+        c = self.chains[(count, j)]
+        while c["pos"] < len(c["order"]) and (count, c["order"][c["pos"]]) in self.done:
+            prev = self.done[(count, c["order"][c["pos"]])]
             if prev["feasible"]:
                 c["start"] = prev["design"]
             c["pos"] += 1
@@ -181,63 +223,36 @@ def sweep(problem, out_dir, points: int | None = None, workers: int | None = Non
             return
         i = c["order"][c["pos"]]
         fallbacks = [e["design"] for e in c["ends"] if e["design"] != c["start"]]
-        fut = ex.submit(worker.solve_point, problem, count, i, float(c["eps"][i]),
-                        c["start"], fallbacks)
-        running[fut] = (count, j)
+        fut = self.ex.submit(worker.solve_point, self.problem, count, i, float(c["eps"][i]),
+                             c["start"], fallbacks)
+        self.running[fut] = (count, j)
 
-    def open_count(count):
-        ends = {k: done[(count, k)] for k in ENDS}
+    def open_count(self, count: int) -> None:
+        """Both ends of a count are known: lay out its ε grid and start its chains."""
+        ends = {k: self.done[(count, k)] for k in ENDS}
         if not ends["least_ripple"]["feasible"]:
             return
-        eps = grid(section, ends, n_points)
+        eps = grid(self.section, ends, self.n_points)
         if len(eps) == 0:
             return
         lo_end, hi_end = ends["least_ripple"], ends["largest_ratio"]
         interior = list(range(len(eps)))
-        if eps[0] == lo_end["ratio"] and (count, 0) not in done:
-            finish(worker.copy_end(lo_end, 0))
+        if eps[0] == lo_end["ratio"] and (count, 0) not in self.done:
+            self.finish(worker.copy_end(lo_end, 0))
         if eps[0] == lo_end["ratio"]:
             interior.remove(0)
         last = len(eps) - 1
         if last > 0 and hi_end["feasible"] and eps[-1] == hi_end["ratio"]:
-            if (count, last) not in done:
-                finish(worker.copy_end(hi_end, last))
+            if (count, last) not in self.done:
+                self.finish(worker.copy_end(hi_end, last))
             interior.remove(last)
         ok_ends = [e for e in (lo_end, hi_end) if e["feasible"]]
-        for j, order in enumerate(_chains(interior, eps, n_chains)):
+        for j, order in enumerate(_chains(interior, eps, self.n_chains)):
             up = order[0] <= order[-1]
             start = lo_end if up or not hi_end["feasible"] else hi_end
-            chains[(count, j)] = {"order": order, "pos": 0, "start": start["design"],
-                                  "eps": eps, "ends": ok_ends}
-            submit_chain(count, j)
-
-    interrupted = True
-    try:
-        for n in counts:
-            missing = [k for k in ENDS if (n, k) not in done]
-            for k in missing:
-                running[ex.submit(worker.solve_end, problem, n, k)] = (n, None)
-            if not missing:
-                open_count(n)
-        while running:
-            for fut in ex.wait_any(list(running)):
-                count, j = running.pop(fut)
-                finish(fut.result())
-                if j is None:
-                    if all((count, k) in done for k in ENDS):
-                        open_count(count)
-                else:
-                    submit_chain(count, j)
-                _rebuild(problem, done, out, settings)
-        interrupted = False
-    finally:
-        bar.close()
-        ex.close(interrupted)
-    result = _rebuild(problem, done, out, settings)
-    result.run.update({"wall_time_s": time.perf_counter() - t0, "resumed_points": n_resumed,
-                       "workers": "dask" if scheduler is not None else n_workers})
-    write_front(result, out)
-    return result
+            self.chains[(count, j)] = {"order": order, "pos": 0, "start": start["design"],
+                                       "eps": eps, "ends": ok_ends}
+            self.submit_chain(count, j)
 
 
 def _rebuild(problem, done: dict, out: Path, settings: dict) -> ParetoResult:

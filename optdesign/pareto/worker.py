@@ -10,7 +10,8 @@ from __future__ import annotations
 import hashlib
 import pickle
 import time
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
+from typing import Any
 
 from ..errors import OptDesignError
 from ..solve import PhaseSolver, solve_phase
@@ -45,23 +46,38 @@ def criteria_columns(problem, values: dict) -> dict:
     return out
 
 
-def _record(problem, count, tag, kind, epsilon, values, ver, status, multiplier, t0,
-            iterations, tries, ipopt_status, note="") -> dict:
-    feasible = status == "optimal"
-    design = {k: float(values[k]) for k in problem.model.lengths} if values else {}
-    if design:
-        design[problem.model.count_variable] = count
-    return {"key": [count, tag], "phases": count, "kind": kind, "epsilon": epsilon,
-            "status": status, "feasible": feasible, "design": design,
-            "delta": ver.delta if ver is not None and feasible else None,
-            "ratio": ver.ratio if ver is not None and feasible else None,
-            "min_transmission_angle_deg": ver.min_angle_deg if ver is not None and feasible
-            else None,
-            **({k: (v if feasible else None) for k, v in
-                criteria_columns(problem, values or problem.start_values()).items()}),
-            "ratio_multiplier": multiplier, "ipopt_status": ipopt_status,
-            "iterations": iterations, "tries": tries, "time_s": time.perf_counter() - t0,
-            "note": note}
+@dataclass
+class _Point:
+    """One grid point or end of a phase count's front, and the work spent on it."""
+
+    problem: Any
+    count: int
+    tag: Any                     # grid index, or the end's kind
+    kind: str                    # least_ripple | largest_ratio | sweep
+    epsilon: float | None = None
+    iterations: int = 0
+    tries: int = 0
+    t0: float = field(default_factory=time.perf_counter)
+
+    def record(self, status: str, values: dict | None = None, figures=None,
+               multiplier: float | None = None, ipopt_status: str = "", note: str = "") -> dict:
+        """The journal's record; ``figures`` has ``delta``, ``ratio``, ``min_angle_deg``."""
+        problem, feasible = self.problem, status == "optimal"
+        design = {k: float(values[k]) for k in problem.model.lengths} if values else {}
+        if design:
+            design[problem.model.count_variable] = self.count
+        exact = figures is not None and feasible
+        columns = criteria_columns(problem, values or problem.start_values())
+        return {"key": [self.count, self.tag], "phases": self.count, "kind": self.kind,
+                "epsilon": self.epsilon, "status": status, "feasible": feasible,
+                "design": design,
+                "delta": figures.delta if exact else None,
+                "ratio": figures.ratio if exact else None,
+                "min_transmission_angle_deg": figures.min_angle_deg if exact else None,
+                **{k: (v if feasible else None) for k, v in columns.items()},
+                "ratio_multiplier": multiplier, "ipopt_status": ipopt_status,
+                "iterations": self.iterations, "tries": self.tries,
+                "time_s": time.perf_counter() - self.t0, "note": note}
 
 
 def solve_end(problem, count: int, kind: str) -> dict:
@@ -71,44 +87,40 @@ def solve_end(problem, count: int, kind: str) -> dict:
     ``largest_ratio``: maximise the ratio under a loose ripple cap, then re-minimise δ with the
     ratio held at that value (a lexicographic optimum, so the end point is not dominated).
     """
-    t0 = time.perf_counter()
+    point = _Point(problem, count, kind, kind)
     if kind == "least_ripple":
         res = solve_phase(problem, count, solver=_solver(problem, count))
-        iterations = res.iterations
+        point.iterations, point.tries = res.iterations, len(res.starts)
         if res.status != "optimal":
-            return _record(problem, count, kind, kind, None, None, None, res.status, None, t0,
-                           iterations, len(res.starts), "", res.message)
-        ver_ok = _Ver(res.delta, res.ratio, res.min_transmission_angle_deg)
+            return point.record(res.status, note=res.message)
         slack = res.ratio - problem.objective.min_ratio > 1e-6
-        return _record(problem, count, kind, kind, None, res.design, ver_ok, "optimal",
-                       0.0 if slack else None, t0, iterations, len(res.starts),
-                       "Solve_Succeeded")
+        return point.record("optimal", res.design, _Ver.of(res), 0.0 if slack else None,
+                            "Solve_Succeeded")
     q = replace(problem, objective=replace(problem.objective, minimize="-ratio",
                                            max_ripple=LOOSE_MAX_RIPPLE))
     res = solve_phase(q, count, solver=_solver(q, count))
+    point.iterations, point.tries = res.iterations, len(res.starts)
     if res.status != "optimal":
-        return _record(problem, count, kind, kind, None, None, None, res.status, None, t0,
-                       res.iterations, len(res.starts), "", res.message)
+        return point.record(res.status, note=res.message)
     ratio = res.ratio * (1 - END_RATIO_BACKOFF)
     outcome = _solver(problem, count).solve_from(dict(res.design), min_ratio=ratio)
-    rec, ver, values = outcome.record, outcome.verification, outcome.values
-    iterations = res.iterations + rec.iterations
+    rec, ver = outcome.record, outcome.verification
+    point.iterations += rec.iterations
     if rec.feasible and ver.delta <= res.delta:
-        return _record(problem, count, kind, kind, ratio, values, ver, "optimal",
-                       rec.ratio_multiplier if rec.ipopt_status == "Solve_Succeeded" else None,
-                       t0, iterations, len(res.starts) + 1, rec.ipopt_status)
-    return _record(problem, count, kind, kind, None, res.design,
-                   _Ver(res.delta, res.ratio, res.min_transmission_angle_deg), "optimal",
-                   None, t0, iterations, len(res.starts), "Solve_Succeeded")
+        point.tries, point.epsilon = point.tries + 1, ratio
+        return point.record("optimal", outcome.values, ver,
+                            rec.ratio_multiplier if rec.ipopt_status == "Solve_Succeeded"
+                            else None, rec.ipopt_status)
+    return point.record("optimal", res.design, _Ver.of(res), None, "Solve_Succeeded")
 
 
 def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
                 fallbacks: list[dict]) -> dict:
     """Least ripple subject to ratio >= ε, warm-started from ``start`` (the chain's previous
     design); on failure from each of ``fallbacks``, then from the multi-start designs."""
-    t0 = time.perf_counter()
+    point = _Point(problem, count, index, "sweep", epsilon)
     solver = _solver(problem, count)
-    iterations, tries, last, note = 0, 0, None, "no start design assembles"
+    last, note = None, "no start design assembles"
 
     def attempts():
         yield from (dict(s) for s in [start, *fallbacks] if s)
@@ -116,30 +128,27 @@ def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
             yield dict(d.values)
 
     for values in attempts():
+        point.tries += 1
         try:
             outcome = solver.solve_from(values, min_ratio=epsilon)
-            rec, ver, values = outcome.record, outcome.verification, outcome.values
         except (OptDesignError, RuntimeError, ValueError, ArithmeticError) as exc:
             # one start that breaks the evaluator (CasADi raises RuntimeError) is one failed
             # start, not a failed sweep
-            tries += 1
             note = f"{type(exc).__name__}: {exc}"
             continue
-        iterations += rec.iterations
-        tries += 1
-        last = rec
-        if rec.feasible:
-            mult = rec.ratio_multiplier if rec.ipopt_status == "Solve_Succeeded" else None
-            return _record(problem, count, index, "sweep", epsilon, values, ver, "optimal",
-                           mult, t0, iterations, tries, rec.ipopt_status)
-        if tries >= 2 + max(1, problem.solver.starts):
+        last = outcome.record
+        point.iterations += last.iterations
+        if last.feasible:
+            mult = last.ratio_multiplier if last.ipopt_status == "Solve_Succeeded" else None
+            return point.record("optimal", outcome.values, outcome.verification, mult,
+                                last.ipopt_status)
+        if point.tries >= 2 + max(1, problem.solver.starts):
             break
     # as in solve.driver: infeasible only on IPOPT's word, not for running out of iterations
     status = "infeasible" if last is not None and \
         last.ipopt_status == "Infeasible_Problem_Detected" else "failed"
-    return _record(problem, count, index, "sweep", epsilon, None, None, status, None, t0,
-                   iterations, tries, last.ipopt_status if last else "",
-                   last.note if last else note)
+    return point.record(status, ipopt_status=last.ipopt_status if last else "",
+                        note=last.note if last else note)
 
 
 def copy_end(end: dict, index: int) -> dict:
@@ -148,9 +157,14 @@ def copy_end(end: dict, index: int) -> dict:
                   "epsilon": end["ratio"] if end["epsilon"] is None else end["epsilon"]}
 
 
+@dataclass(frozen=True)
 class _Ver:
-    """The three figures of a PhaseResult, shaped like a Verification for ``_record``."""
+    """The three exact figures of a PhaseResult, shaped like a Verification."""
 
-    def __init__(self, delta, ratio, angle):
-        self.delta, self.ratio, self.min_angle_deg = delta, ratio, angle
+    delta: float
+    ratio: float
+    min_angle_deg: float
 
+    @classmethod
+    def of(cls, res) -> "_Ver":
+        return cls(res.delta, res.ratio, res.min_transmission_angle_deg)

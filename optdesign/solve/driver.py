@@ -106,53 +106,35 @@ class PhaseSolver:
                           else max_ripple)
             problem = replace(problem, objective=obj)
         ver = ver or self.verify(problem, values)
-        start = dict(values)
-        t0 = time.perf_counter()
-        # The NLP holds the worst transmission angle at exact points; the samples alone (a
-        # mechanism whose angle the NLP does not track) get a safety margin from the start.
-        iterations, status, surrogate = 0, "not run", None
-        tightening = 0.0
-        multiplier, note = None, ""
-        hessian = problem.solver.hessian
+        start, t0 = dict(values), time.perf_counter()
+        # The NLP holds the worst transmission angle at exact points: no margin to start with;
+        # a dip the exact check still finds tightens the bound by the deficit.
+        iterations, status, surrogate, multiplier, note = 0, "not run", None, None, ""
+        tightening, hessian = 0.0, problem.solver.hessian
         for _ in range(MAX_REFINEMENTS):
             if not ver.sequences:
                 note = ver.message
                 break
-            given = ver.sequences
-            nlp = self.nlp(given)
-            guess = start_guess(nlp, ver)
-            lbx, ubx = nlp.bounds(guess, ver.sequences)
-            x0 = np.clip(nlp.pack(guess), lbx, ubx)
-            params = nlp.parameters(ver.sequences)
-            lbg, ubg = nlp.constraint_bounds(problem, ver.sequences, tightening)
-            with self.timings.stage("build"):
-                solver = nlp.solver(hessian)
-            with self.timings.stage("ipopt"):
-                sol = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=params)
-            stats = solver.stats()
-            status = stats["return_status"]
-            iterations += int(stats["iter_count"])
-            x = np.array(sol["x"]).ravel()
-            multiplier = nlp.multiplier(sol["lam_g"], "min_ratio")
-            at_window = nlp.at_window_bound(x, lbx, ubx)
-            trial = values | nlp.lengths_of(x)
+            run = self._ipopt(problem, ver, tightening, hessian)
+            status, surrogate, multiplier = run.status, run.surrogate, run.multiplier
+            iterations += run.iterations
+            trial = values | run.lengths
             new = self.verify(problem, trial)
-            surrogate = nlp.worst_ripple(x, params)
             if status == "Maximum_Iterations_Exceeded" and hessian == "limited-memory":
                 # The quasi-Newton run stalled: once more from the same start with CasADi's
                 # exact Hessian, which converges, or certifies local infeasibility, where
-                # L-BFGS wanders (benchmarks/hessian_choice.py).
+                # L-BFGS wanders.
                 hessian = "exact"
                 continue
             if status not in SUCCESS:
-                note = nlp.binding(np.array(sol["g"]).ravel(), lbg, ubg)
+                note = run.binding
                 values, ver = (trial, new) if new.sequences else (values, ver)
                 break
-            values, ver = trial, new
+            given, (values, ver) = ver.sequences, (trial, new)
             if "transmission_angle" in ver.violations:
                 tightening += ver.violations["transmission_angle"] + ANGLE_SAFETY_DEG
                 continue
-            if ver.sequences != given or at_window:
+            if ver.sequences != given or run.at_window:
                 continue        # hand-overs changed order, or an angle ran to its window
             break
         record = StartRecord(start=start, ipopt_status=status, iterations=iterations,
@@ -160,6 +142,93 @@ class PhaseSolver:
                              feasible=bool(ver.feasible and status in SUCCESS),
                              delta=ver.delta, note=note, ratio_multiplier=multiplier)
         return Outcome(record, ver, values, surrogate)
+
+    def _ipopt(self, problem, ver: Verification, tightening: float, hessian: str) -> "_Run":
+        """One IPOPT run on the NLP from the verified design ``ver``."""
+        nlp = self.nlp(ver.sequences)
+        guess = start_guess(nlp, ver)
+        lbx, ubx = nlp.bounds(guess, ver.sequences)
+        params = nlp.parameters(ver.sequences)
+        lbg, ubg = nlp.constraint_bounds(problem, ver.sequences, tightening)
+        with self.timings.stage("build"):
+            solver = nlp.solver(hessian)
+        with self.timings.stage("ipopt"):
+            sol = solver(x0=np.clip(nlp.pack(guess), lbx, ubx), lbx=lbx, ubx=ubx, lbg=lbg,
+                         ubg=ubg, p=params)
+        stats = solver.stats()
+        x = np.array(sol["x"]).ravel()
+        return _Run(status=stats["return_status"], iterations=int(stats["iter_count"]),
+                    lengths=nlp.lengths_of(x), surrogate=nlp.worst_ripple(x, params),
+                    multiplier=nlp.multiplier(sol["lam_g"], "min_ratio"),
+                    at_window=nlp.at_window_bound(x, lbx, ubx),
+                    binding=nlp.binding(np.array(sol["g"]).ravel(), lbg, ubg))
+
+
+@dataclass
+class _Run:
+    """What one IPOPT run returned, read off the NLP by name."""
+
+    status: str
+    iterations: int
+    lengths: dict
+    surrogate: float
+    multiplier: float
+    at_window: bool
+    binding: str
+
+
+class _Polishing:
+    """The polishes of one phase count: their records, the distinct optima, the best."""
+
+    def __init__(self, problem, count: int, solver: PhaseSolver, result: PhaseResult):
+        self.problem, self.count, self.solver, self.result = problem, count, solver, result
+        self.best: Outcome | None = None
+        self.optima: list[Outcome] = []
+        self.polished = 0
+
+    def polish(self, values: dict) -> Outcome:
+        outcome = self.solver.solve_from(dict(values))
+        self.polished += 1
+        self.result.starts.append(outcome.record)
+        self.result.iterations += outcome.record.iterations
+        if outcome.record.feasible:
+            if not any(_same_optimum(self.problem, outcome, o) for o in self.optima):
+                self.optima.append(outcome)
+            if self.best is None or outcome.verification.key < self.best.verification.key:
+                self.best = outcome
+        return outcome
+
+    def basins(self, seeds) -> None:
+        """Polish the best basins' seeds: `basins` of them once one is feasible; with none
+        feasible, on until `agree + 1` IPOPT verdicts of local infeasibility on one constraint
+        (or `starts` polishes)."""
+        s = self.problem.solver
+        for seed in seeds:
+            if self.polished >= s.starts or (self.best is not None and
+                                             self.polished >= s.basins):
+                return
+            outcome = self.polish(seed.values)
+            verdicts = [r.note for r in self.result.starts
+                        if r.ipopt_status == "Infeasible_Problem_Detected"]
+            if self.best is None and outcome.record.note and \
+                    verdicts.count(outcome.record.note) >= s.agree + 1:
+                return
+
+    def lines(self) -> None:
+        """Line screening through the best optimum: a basin beside its face is polished while
+        it improves on the best (within the polish budget)."""
+        tried: list[dict] = []
+        while self.best is not None and self.polished < self.problem.solver.starts:
+            with self.solver.timings.stage("screening"):
+                beside = [c for c in line_seeds(self.problem, self.count, self.best.values)
+                          if not any(_close(self.problem, c.values, t) for t in tried)]
+            if not beside:
+                return
+            tried.append(beside[0].values)
+            before = self.best.verification.key
+            self.polish(beside[0].values)
+            if self.best.verification.key >= before - SAME_KEY_REL * max(1e-3, abs(before)):
+                return
 
 
 def solve_phase(problem, count: int, solver: PhaseSolver | None = None) -> PhaseResult:
@@ -169,69 +238,28 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None) -> Phase
         if fixed is not None:
             return fixed
     solver = solver or PhaseSolver(problem, count)
-    s = problem.solver
     with solver.timings.stage("screening"):
-        screening = screen(problem, count, s.screen)
-    seeds = screening.seeds
+        screening = screen(problem, count, problem.solver.screen)
     result = PhaseResult(count, "failed", screening=screening.to_dict())
-    best: Outcome | None = None
-    optima: list[Outcome] = []
-    polished = 0
-    for seed in seeds:
-        if polished >= s.starts or (best is not None and polished >= s.basins):
-            break
-        outcome = solver.solve_from(dict(seed.values))
-        polished += 1
-        result.starts.append(outcome.record)
-        result.iterations += outcome.record.iterations
-        if not outcome.record.feasible:
-            # no feasible design yet, and IPOPT found `agree + 1` starts locally infeasible
-            # on this same constraint: the phase count is infeasible
-            verdicts = [r.note for r in result.starts
-                        if r.ipopt_status == "Infeasible_Problem_Detected"]
-            if best is None and outcome.record.note and \
-                    verdicts.count(outcome.record.note) >= s.agree + 1:
-                break
-            continue
-        if not any(_same_optimum(problem, outcome, o) for o in optima):
-            optima.append(outcome)
-        if best is None or outcome.verification.key < best.verification.key:
-            best = outcome
-    # Line screening through the best optimum: basins beside its face, polished while they
-    # improve on it (within the polish budget).
-    tried: list[dict] = []
-    while best is not None and polished < s.starts:
-        with solver.timings.stage("screening"):
-            beside = [c for c in line_seeds(problem, count, best.values)
-                      if not any(_close(problem, c.values, t) for t in tried)]
-        if not beside:
-            break
-        tried.append(beside[0].values)
-        outcome = solver.solve_from(dict(beside[0].values))
-        polished += 1
-        result.starts.append(outcome.record)
-        result.iterations += outcome.record.iterations
-        if not outcome.record.feasible:
-            continue
-        if not any(_same_optimum(problem, outcome, o) for o in optima):
-            optima.append(outcome)
-        if outcome.verification.key < best.verification.key - \
-                SAME_KEY_REL * max(1e-3, abs(best.verification.key)):
-            best = outcome
-        else:
-            break
-    result.screening |= {"polished": polished, "distinct_optima": len(optima)}
+    work = _Polishing(problem, count, solver, result)
+    work.basins(screening.seeds)
+    work.lines()
+    result.screening |= {"polished": work.polished, "distinct_optima": len(work.optima)}
     result.timings = solver.timings.to_dict()
-    if best is not None:
-        return _fill(result, problem, best)
-    notes = [r.note for r in result.starts if r.note]
-    statuses = {r.ipopt_status for r in result.starts}
-    if not seeds:
+    if work.best is not None:
+        return _fill(result, problem, work.best)
+    if not screening.seeds:
         result.status, result.binding = "infeasible", "assembly"
         result.message = (f"no design within the bounds assembles at every listed "
                           f"eccentricity with {count} phases")
         return result
-    # Infeasible only on IPOPT's word; starts that ran out of iterations prove nothing.
+    return _no_optimum(result)
+
+
+def _no_optimum(result: PhaseResult) -> PhaseResult:
+    """Infeasible only on IPOPT's word; polishes that ran out of iterations prove nothing."""
+    notes = [r.note for r in result.starts if r.note]
+    statuses = {r.ipopt_status for r in result.starts}
     result.status = "infeasible" if "Infeasible_Problem_Detected" in statuses else "failed"
     result.binding = max(set(notes), key=notes.count) if notes else None
     result.message = (f"no start reached a verified feasible optimum (IPOPT: "

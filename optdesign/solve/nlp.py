@@ -97,6 +97,29 @@ class Quantities:
     cos_mu_sq: dict                 # eccentricity tag -> cos²μ of every chain at every sample
 
 
+class _Builder:
+    """Collects the NLP's variables, parameters and constraint rows, each a named block."""
+
+    def __init__(self, layout: Layout):
+        self.layout, self.x, self.p, self.g = layout, [], [], []
+
+    def variable(self, name: str, size: int):
+        v = ca.MX.sym(name, size)
+        self.layout.add(self.layout.x, name, size)
+        self.x.append(v)
+        return v
+
+    def parameter(self, name: str, rows: int, cols: int = 1):
+        v = ca.MX.sym(name, rows, cols)
+        self.layout.add(self.layout.p, name, rows * cols)
+        self.p.append(ca.vec(v))
+        return v
+
+    def row(self, name: str, expr) -> None:
+        self.layout.add(self.layout.g, name, expr.numel())
+        self.g.append(expr)
+
+
 def smooth_max(values, rho):
     """log-sum-exp maximum, (1/ρ)·log Σ exp(ρ·v) >= max v, shifted by max v for stability.
 
@@ -195,98 +218,82 @@ class PhaseNLP:
 
     def _build(self):
         P, L = self.problem, self.layout
-        fn = self.model.kinematics(self.count, tuple(sorted(P.options.items())))
-        C, M, N = self.n_curves, self.slots, self.phi.size
-        xs = ca.MX.sym("lengths", len(self.free))
-        L.add(L.x, "lengths", len(self.free))
-        x_parts, p_parts, g_rows = [xs], [], []
-        fixed = ca.MX.sym("fixed", len(self.fixed))
-        L.add(L.p, "fixed", len(self.fixed))
-        p_parts.append(fixed)
+        b = _Builder(L)
+        xs = b.variable("lengths", len(self.free))
+        fixed = b.parameter("fixed", len(self.fixed))
         lengths = {k: xs[i] * self.scale[i] for i, k in enumerate(self.free)}
         lengths |= {k: fixed[i] for i, k in enumerate(self.fixed)}
-
-        def variable(name, size):
-            v = ca.MX.sym(name, size)
-            L.add(L.x, name, size)
-            x_parts.append(v)
-            return v
-
-        def parameter(name, rows, cols=1):
-            v = ca.MX.sym(name, rows, cols)
-            L.add(L.p, name, rows * cols)
-            p_parts.append(ca.vec(v))
-            return v
-
-        sample_map = self._sample_function(fn).map(N)
-        points = self._points_function()
-        slot_map = self._slot_function(fn).map(M)
+        fn = self.model.kinematics(self.count, tuple(sorted(P.options.items())))
+        functions = (self._sample_function(fn).map(self.phi.size), self._points_function(),
+                     self._slot_function(fn).map(self.slots))
         ripples, means, peaks, cos_sq = [], [], [], {}
         for e in self.eccs:
-            tag = tag_of(e)
             pvec = ca.vertcat(*[lengths[k] * (e if k == self.model.regulating_variable else 1)
                                 for k in self.model.lengths])
-            # Speeds of eccentricity e in units of e·ω1: they shrink like e, and at e = 1e-6
-            # they would sit below IPOPT's tolerances (ripple and ratio are ratios, so the
-            # unit cancels).
-            w = variable(f"w_{tag}", 2)
-            w_hi, w_lo = w[0], w[1]
-            cos_mu_sq, lse, f_samples = sample_map(self.phi[None, :], pvec, 1.0 / e)
-            cos_sq[tag] = ca.vec(cos_mu_sq)
-            g_rows.append((f"trough_samples[{tag}]", ca.vec(lse) - w_lo))
-            if P.solver.peak_samples:          # a safety net: ω_max bounded at every sample
-                g_rows.append((f"peak_samples[{tag}]", ca.vec(w_hi - f_samples)))
-            # Exact peaks: one stationary point per curve; with a transmission angle, the
-            # largest and the least cos μ of every chain at a stationary point of its own, so
-            # the bound holds between samples too.
-            phi_m = variable(f"phi_peak_{tag}", C)
-            phi_mu = variable(f"phi_mu_{tag}", 2 * self.count) if self.has_mu else ca.MX(0, 1)
-            f_m, df_m, cos_x, dcos_x = points(phi_m, phi_mu, pvec, 1.0 / e)
-            g_rows.append((f"peak_stationary[{tag}]", df_m))
-            g_rows.append((f"peak_points[{tag}]", w_hi - f_m))
-            if self.has_mu:
-                g_rows.append((f"mu_stationary[{tag}]", dcos_x))
-                cos_sq[tag] = ca.vertcat(cos_sq[tag], cos_x ** 2)
-            # Exact troughs at the hand-overs, and the exact mean over the runs.
-            phi_x = variable(f"phi_handover_{tag}", M)
-            before = parameter(f"before_{tag}", C + 1, M)
-            after = parameter(f"after_{tag}", C + 1, M)
-            active = parameter(f"active_{tag}", M)
-            last = parameter(f"last_{tag}", M)
-            th_x, dth_x = slot_map(phi_x.T, pvec)
-            f_x, th = self._stack(dth_x / e), self._stack(th_x)
-            g_rows.append((f"trough_handovers[{tag}]",
-                           ca.vertcat(ca.sum1(before * f_x).T - w_lo,
-                                      ca.sum1(after * f_x).T - w_lo)))
-            th_start = ca.sum1(after * th).T
-            th_next = ca.sum1(after * ca.horzcat(th[:, 1:], th[:, :1])).T
-            th_first = ca.sum1(after * ca.repmat(th[:, 0], 1, M)).T
-            th_end = (1 - last) * th_next + last * th_first
-            mean = ca.dot(active, _wrap(th_end - th_start)) / (2 * math.pi * e)
-            avg = 0.5 * (w_hi + w_lo) if P.objective.ripple == "midrange" else mean
-            ripples.append((w_hi - w_lo) / avg)
+            ripple, mean, peak, cos_sq[tag_of(e)] = self._eccentricity(b, e, pvec, functions)
+            ripples.append(ripple)
             means.append(mean)
-            peaks.append(w_hi)
-        t = variable("worst_ripple", 1)
-        g_rows.append(("ripple_epigraph", ca.vertcat(*[t - ripples[i] for i in self.listed])))
+            peaks.append(peak)
+        t = b.variable("worst_ripple", 1)
+        b.row("ripple_epigraph", ca.vertcat(*[t - ripples[i] for i in self.listed]))
         q = Quantities(lengths=lengths, ratio=means[0], worst_ripple=t,
                        peak_speed=peaks[0] * P.input_speed, cos_mu_sq=cos_sq)
         self._criterion_blocks = []
         for criterion in self.criteria:
             for name, expr in criterion.rows(q):
-                g_rows.append((name, ca.vertcat(expr)))
+                b.row(name, ca.vertcat(expr))
                 self._criterion_blocks.append((name, criterion))
-        for name, expr in g_rows:
-            L.add(L.g, name, expr.numel())
-        x = ca.vertcat(*x_parts)
-        self.g = ca.vertcat(*[expr for _, expr in g_rows])
-        self.p_sym = ca.vertcat(*p_parts)
-        self.x_sym = x
+        self.x_sym, self.p_sym = ca.vertcat(*b.x), ca.vertcat(*b.p)
+        self.g = ca.vertcat(*b.g)
         self.f = self.objective.expression(q)
-        self.n_x, self.n_g, self.n_p = x.numel(), self.g.numel(), self.p_sym.numel()
-        self.surrogate = ca.Function("surrogate", [x, self.p_sym],
+        self.n_x, self.n_g, self.n_p = self.x_sym.numel(), self.g.numel(), self.p_sym.numel()
+        self.surrogate = ca.Function("surrogate", [self.x_sym, self.p_sym],
                                      [ca.vertcat(*ripples), ca.vertcat(*means),
                                       ca.vertcat(*peaks)])
+
+    def _eccentricity(self, b: "_Builder", e: float, pvec, functions):
+        """The variables and rows of one eccentricity: (δ_e, mean_e, w_hi, cos²μ rows).
+
+        Speeds are in units of e·ω1: they shrink like e, and at e = 1e-6 they would sit below
+        IPOPT's tolerances (ripple and ratio are ratios, so the unit cancels).
+        """
+        sample_map, points, slot_map = functions
+        tag, C, M = tag_of(e), self.n_curves, self.slots
+        w = b.variable(f"w_{tag}", 2)
+        w_hi, w_lo = w[0], w[1]
+        cos_mu_sq, lse, f_samples = sample_map(self.phi[None, :], pvec, 1.0 / e)
+        cos_sq = ca.vec(cos_mu_sq)
+        b.row(f"trough_samples[{tag}]", ca.vec(lse) - w_lo)
+        if self.problem.solver.peak_samples:      # a safety net: ω_max bounded at every sample
+            b.row(f"peak_samples[{tag}]", ca.vec(w_hi - f_samples))
+        # Exact peaks: one stationary point per curve; with a transmission angle, the largest
+        # and the least cos μ of every chain at a stationary point of its own, so the bound
+        # holds between samples too.
+        phi_m = b.variable(f"phi_peak_{tag}", C)
+        phi_mu = b.variable(f"phi_mu_{tag}", 2 * self.count) if self.has_mu else ca.MX(0, 1)
+        f_m, df_m, cos_x, dcos_x = points(phi_m, phi_mu, pvec, 1.0 / e)
+        b.row(f"peak_stationary[{tag}]", df_m)
+        b.row(f"peak_points[{tag}]", w_hi - f_m)
+        if self.has_mu:
+            b.row(f"mu_stationary[{tag}]", dcos_x)
+            cos_sq = ca.vertcat(cos_sq, cos_x ** 2)
+        # Exact troughs at the hand-overs, and the exact mean over the runs.
+        phi_x = b.variable(f"phi_handover_{tag}", M)
+        before = b.parameter(f"before_{tag}", C + 1, M)
+        after = b.parameter(f"after_{tag}", C + 1, M)
+        active = b.parameter(f"active_{tag}", M)
+        last = b.parameter(f"last_{tag}", M)
+        th_x, dth_x = slot_map(phi_x.T, pvec)
+        f_x, th = self._stack(dth_x / e), self._stack(th_x)
+        b.row(f"trough_handovers[{tag}]", ca.vertcat(ca.sum1(before * f_x).T - w_lo,
+                                                     ca.sum1(after * f_x).T - w_lo))
+        th_start = ca.sum1(after * th).T
+        th_next = ca.sum1(after * ca.horzcat(th[:, 1:], th[:, :1])).T
+        th_first = ca.sum1(after * ca.repmat(th[:, 0], 1, M)).T
+        th_end = (1 - last) * th_next + last * th_first
+        mean = ca.dot(active, _wrap(th_end - th_start)) / (2 * math.pi * e)
+        avg = 0.5 * (w_hi + w_lo) if self.problem.objective.ripple == "midrange" else mean
+        return (w_hi - w_lo) / avg, mean, w_hi, cos_sq
 
     def solver(self, hessian: str) -> ca.Function:
         """IPOPT on this NLP with the exact Hessian or L-BFGS; each built at its first use."""

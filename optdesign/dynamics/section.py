@@ -25,6 +25,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..errors import ProblemError
+
 METHODS = ("Radau", "BDF", "LSODA", "RK45")
 FREEWHEEL_MODELS = ("ratchet", "composite")
 CRANK_MODELS = ("dynamic", "constant")
@@ -63,6 +65,19 @@ class DynamicsSection:
 
     def stiffness_per_phase(self, count: int) -> tuple[float, ...]:
         return self.stiffness * count if len(self.stiffness) == 1 else self.stiffness
+
+    def check_problem(self, problem) -> None:
+        """What the section asks of the rest of the file, checked when it is loaded: one
+        stiffness or one per phase of every admissible count; no damping on a composite
+        freewheel (the ``simulate`` command checks its own overrides again)."""
+        for count in problem.counts():
+            if len(self.stiffness) not in (1, count):
+                raise ProblemError(f"{problem.source}: dynamics.stiffness must have one value "
+                                   f"or one per phase (got {len(self.stiffness)} for {count} "
+                                   f"phases)")
+        if self.freewheel == "composite" and self.damping_ratio > 0:
+            raise ProblemError(f"{problem.source}: dynamics.damping_ratio must be 0 with "
+                               f"freewheel: composite (got {self.damping_ratio:g})")
 
 
 def parse_section(raw, reader) -> DynamicsSection:

@@ -68,6 +68,15 @@ def test_stiffness_per_phase_count(write_problem, capsys):
         "(got 3 for 6 phases)")
 
 
+def test_section_is_checked_when_the_file_is_loaded(write_problem):
+    """Both rules hold at load, so analyze and solve refuse such a file too, not only
+    simulate after its set-up."""
+    with pytest.raises(ProblemError, match=r"dynamics\.stiffness must have one value"):
+        load_problem(problem_with(write_problem, stiffness=[2877.0, 2877.0, 2877.0]))
+    with pytest.raises(ProblemError, match=r"dynamics\.damping_ratio must be 0"):
+        load_problem(problem_with(write_problem, damping_ratio=0.1, freewheel="composite"))
+
+
 def test_damping_needs_ratchet(write_problem, capsys):
     path = problem_with(write_problem, damping_ratio=0.1, freewheel="composite")
     assert main(["simulate", str(path)]) == 2

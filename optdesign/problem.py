@@ -190,7 +190,7 @@ def load_problem(path: str | Path) -> Problem:
 
 def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "problem") -> Problem:
     """Validate a problem given as a mapping (what a YAML file holds)."""
-    r = _Reader(where)
+    r = Reader(where)
     top = r.mapping(data, "")
     r.known_keys(top, "", TOP_KEYS | set(SECTION_PARSERS))
     name = r.text(top.get("name", default_name), "name")
@@ -337,17 +337,12 @@ def _read_constraints(r, raw, mech) -> Constraints:
             raise r.error("constraints.min_transmission_angle_deg",
                           f"must lie in [0, 90) degrees (got {mu:g})")
         kw["min_transmission_angle_deg"] = mu
-    if "min_pin_radius" in raw:
-        kw["min_pin_radius"] = r.number(raw["min_pin_radius"], "constraints.min_pin_radius")
     if "assembly_margin" in raw:
         m = r.number(raw["assembly_margin"], "constraints.assembly_margin")
         if not 0 <= m < 1:
             raise r.error("constraints.assembly_margin", f"must lie in [0, 1) (got {m:g})")
         kw["assembly_margin"] = m
-    if "grashof" in raw:
-        if not isinstance(raw["grashof"], bool):
-            raise r.error("constraints.grashof", "must be true or false")
-        kw["grashof"] = raw["grashof"]
+    kw |= mech.read_constraints({k: raw[k] for k in mech.constraint_keys if k in raw}, r)
     kw["extra"] = {k: v for k, v in raw.items() if k in EXTRA_CONSTRAINT_KEYS}
     return Constraints(**kw)
 
@@ -416,15 +411,15 @@ def _read_solver(r, raw) -> SolverSettings:
     return SolverSettings(**kw)
 
 
-class _Reader:
+class Reader:
     """Type checks that name the file and the key path of what is wrong."""
 
     def __init__(self, where: str, prefix: str = ""):
         self.where = where
         self.prefix = prefix
 
-    def sub(self, key: str) -> "_Reader":
-        return _Reader(self.where, f"{self.prefix}{key}.")
+    def sub(self, key: str) -> "Reader":
+        return Reader(self.where, f"{self.prefix}{key}.")
 
     def error(self, key: str, message: str) -> ProblemError:
         key = f"{self.prefix}{key}".rstrip(".")

@@ -28,9 +28,9 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..accuracy import accuracy_rows, format_table, plot_accuracy
+    from ..accuracy import accuracy_rows, format_table
     from ..errors import ProblemError
-    from ..io import atomic_savefig, atomic_write_json
+    from ..outputs import write_accuracy
     from ..problem import load_problem
 
     problem = load_problem(args.problem)
@@ -44,14 +44,7 @@ def run(args) -> int:
     out = Path(args.out) if args.out else Path("results") / problem.name
     payload = {"problem": problem.name, "reference": {"method": ref.method,
                **ref.figures.to_dict(), "crosscheck": ref.crosscheck}, "rows": rows}
-    files = [atomic_write_json(out / "accuracy.json", payload)]
-    if not args.no_plot:
-        fig = plot_accuracy(rows, title=f"{problem.name}: δ error against run time")
-        try:
-            files.append(atomic_savefig(fig, out / "accuracy.png", dpi=120))
-        finally:
-            import matplotlib.pyplot as plt
-            plt.close(fig)
+    files = write_accuracy(payload, rows, problem, out, plot=not args.no_plot)
     if args.json:
         print(json.dumps(payload, indent=2))
     else:

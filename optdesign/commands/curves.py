@@ -16,10 +16,10 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..curves import member_curves, plot_curves
+    from ..curves import member_curves
     from ..design import Design
     from ..errors import ProblemError
-    from ..io import atomic_savefig
+    from ..outputs import write_curves
     from ..problem import load_problem
 
     problem = load_problem(args.problem)
@@ -30,13 +30,8 @@ def run(args) -> int:
     design = Design.from_problem(problem)
     design.check_assembly(args.eccentricity)          # AssemblyError: exit 1, names the chain
     curves = member_curves(design, problem.stroke, args.eccentricity, args.samples)
-    fig = plot_curves(curves, title=f"{problem.name}: {problem.mechanism}, "
-                                    f"e = {args.eccentricity:g}")
     out = Path(args.out) if args.out else Path("results") / problem.name
-    try:
-        path = atomic_savefig(fig, out / "curves.png", dpi=110)
-    finally:
-        import matplotlib.pyplot as plt
-        plt.close(fig)
+    path = write_curves(curves, f"{problem.name}: {problem.mechanism}, "
+                                f"e = {args.eccentricity:g}", out)
     print(path)
     return 0

@@ -14,6 +14,7 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from ..analysis import analyze
+    from ..outputs import write_driveline
     from ..problem import load_problem
 
     problem = load_problem(args.problem)
@@ -23,19 +24,7 @@ def run(args) -> int:
     out = Path(args.out) if args.out else Path("results") / problem.name
     out.mkdir(parents=True, exist_ok=True)
     path = out / "driveline.png"
-    write_figure(section, path, operating_speed=figures.get("operating_speed_rad_s"),
+    write_driveline(section, path, operating_speed=figures.get("operating_speed_rad_s"),
                  speed_limit=figures.get("speed_limit_rad_s"))
     print(f"wrote {path}")
     return 0
-
-
-def write_figure(section, path: Path, **marks) -> None:
-    """Plot the shaft's figure and save it atomically."""
-    import matplotlib.pyplot as plt
-
-    from ..driveline.plot import plot_driveline
-    from ..io import atomic_savefig
-
-    fig = plot_driveline(section, **marks)
-    atomic_savefig(fig, path, dpi=120, bbox_inches=None)
-    plt.close(fig)

@@ -37,8 +37,8 @@ def _positive(low):
 def run(args) -> int:
     from ..errors import ProblemError
     from ..pareto import sweep
-    from ..pareto.front import write_front
-    from ..pareto.report import summary_text, write_report
+    from ..outputs import write_front, write_report
+    from ..pareto.report import summary_text
     from ..problem import load_problem
 
     problem = load_problem(args.problem)

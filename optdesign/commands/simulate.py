@@ -30,6 +30,7 @@ def run(args) -> int:
     from dataclasses import replace
 
     from ..dynamics.steady import simulate
+    from ..outputs import write_simulation
     from ..errors import ProblemError
     from ..problem import load_problem
 
@@ -41,7 +42,7 @@ def run(args) -> int:
         raise ProblemError(f"--cycles must be at least 1 (got {overrides['cycles']})")
     result = simulate(problem, replace(section, **overrides), method=args.method)
     out = Path(args.out) if args.out else Path("results") / problem.name
-    write_outputs(result, out)
+    write_simulation(result, out)
     if args.json:
         print(json.dumps(result.to_dict(), indent=2))
     else:
@@ -49,33 +50,6 @@ def run(args) -> int:
         print(f"wrote {out}/dynamics.json, dynamics_cycle.csv, dynamics_angles.png, "
               f"dynamics_speeds.png")
     return 0 if result.steady else 1
-
-
-def write_outputs(result, out: Path) -> None:
-    """dynamics.json, the steady cycle as CSV and the two figures, each written atomically."""
-    import numpy as np
-
-    from ..dynamics.plots import plot_angles, plot_speeds
-    from ..io import atomic_savefig, atomic_write_json, atomic_write_text
-
-    out.mkdir(parents=True, exist_ok=True)
-    atomic_write_json(out / "dynamics.json", result.to_dict())
-    tr = result.trace
-    cols = {"t_s": tr["t"], "phi_rad": tr["phi"], "omega_in": tr["omega_in"],
-            "psi_rad": tr["psi"], "omega_out": tr["omega_out"]}
-    for k, label in enumerate(result.labels):
-        cols[f"eps_{label}"] = np.where(tr["engaged"][k], tr["eps"][k], np.nan)
-    header = ",".join(cols)
-    rows = np.column_stack(list(cols.values()))
-    lines = [header] + [",".join(f"{v:.10g}" for v in row) for row in rows]
-    atomic_write_text(out / "dynamics_cycle.csv", "\n".join(lines) + "\n")
-    for name, plot in (("dynamics_angles.png", plot_angles), ("dynamics_speeds.png",
-                                                              plot_speeds)):
-        fig = plot(result)
-        atomic_savefig(fig, out / name, dpi=120)
-        import matplotlib.pyplot as plt
-
-        plt.close(fig)
 
 
 def format_result(r) -> str:

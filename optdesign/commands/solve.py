@@ -18,7 +18,8 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     from ..problem import load_problem
     from ..solve import solve
-    from ..solve.outputs import summary_text, write_outputs
+    from ..outputs import write_solve
+    from ..solve.outputs import summary_text
 
     problem = load_problem(args.problem)
     from tqdm import tqdm
@@ -26,7 +27,7 @@ def run(args) -> int:
               disable=None, leave=False) as bar:
         result = solve(problem, progress=bar.update)
     out = Path(args.out) if args.out else Path("results") / problem.name
-    files = write_outputs(result, problem, out, plots=not args.no_plots)
+    files = write_solve(result, problem, out, plots=not args.no_plots)
     if args.json:
         print(json.dumps(result.to_dict(), indent=2))
     else:

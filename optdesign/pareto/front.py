@@ -3,11 +3,9 @@ indicators; written as ``pareto.csv`` and ``pareto.json``."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-from ..io import atomic_write_bytes, atomic_write_json
 from .indicators import indicators, non_dominated, objectives
 
 #: leading columns of pareto.csv (docs/contract.md names the first nine); the
@@ -103,11 +101,3 @@ def evaluate(points) -> tuple[dict, dict]:
             ind["knee"] = int(group.index[ind["knee"]])
         per_count[int(n)] = ind
     return overall, per_count
-
-
-def write_front(result: ParetoResult, out_dir: str | Path) -> list[Path]:
-    """pareto.csv and pareto.json, each written atomically."""
-    out = Path(out_dir)
-    csv = result.points.drop(columns=["index"]).to_csv(index=False, float_format="%.10g")
-    return [atomic_write_bytes(out / "pareto.csv", csv.encode("utf-8")),
-            atomic_write_json(out / "pareto.json", result.to_dict())]

@@ -12,7 +12,6 @@ import platform
 from datetime import datetime, timezone
 from pathlib import Path
 
-from ..io import atomic_savefig, atomic_write_text
 from .indicators import REFERENCE
 
 MARKERS = "osD^v<>p*h"
@@ -183,39 +182,6 @@ def render_html(items) -> str:
     return (f"<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>Pareto report"
             f"</title><style>{style}</style></head><body>\n" + "\n".join(body) +
             "\n</body></html>\n")
-
-
-def write_report(result, problem, out_dir, problem_path=None,
-                 command: str | None = None) -> list[Path]:
-    """fronts.png, knee_mechanism.png, knee_speeds.png, report.md and report.html."""
-    from ..design import Design
-    from ..plots import pyplot, plot_mechanism, plot_speeds
-    plt = pyplot()
-    out = Path(out_dir)
-    images = {}
-    points = result.points
-    points.attrs["knee"] = result.indicators.get("knee")
-    fig = plot_fronts(points, title=f"{problem.name}: ripple against ratio")
-    images["fronts.png"] = atomic_savefig(fig, out / "fronts.png")
-    plt.close(fig)
-    knee = result.knee
-    if knee is not None:
-        values = {k: float(knee[k]) for k in problem.model.lengths}
-        values[problem.model.count_variable] = int(knee["phases"])
-        design = Design.from_problem(problem, values)
-        fig = plot_mechanism(design, title=f"knee design, n = {int(knee['phases'])}")
-        images["knee_mechanism.png"] = atomic_savefig(fig, out / "knee_mechanism.png")
-        plt.close(fig)
-        fig = plot_speeds(design, problem.stroke, problem.input_speed,
-                          title=f"knee design: δ = {knee['delta']:.4f}, "
-                                f"ratio = {knee['ratio']:.4f}")
-        images["knee_speeds.png"] = atomic_savefig(fig, out / "knee_speeds.png")
-        plt.close(fig)
-    info = run_info(problem, result, problem_path, command)
-    items = blocks(result, problem, info, images)
-    return list(images.values()) + [
-        atomic_write_text(out / "report.md", render_md(items)),
-        atomic_write_text(out / "report.html", render_html(items))]
 
 
 def summary_text(result) -> str:

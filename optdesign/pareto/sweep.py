@@ -21,7 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from . import worker
-from .front import ParetoResult, evaluate, frame, write_front
+from ..outputs import write_front
+from .front import ParetoResult, evaluate, frame
 from .section import DEFAULT_POINTS, ParetoSection
 from .store import Journal
 

@@ -1,10 +1,6 @@
-"""What ``optdesign solve`` leaves in its output folder, every file written atomically."""
+"""The plain-text account of a solve (the files themselves: :func:`optdesign.outputs.write_solve`)."""
 from __future__ import annotations
 
-from pathlib import Path
-
-from ..design import Design
-from ..io import atomic_savefig, atomic_write_json, atomic_write_text
 
 
 def summary_text(result, problem) -> str:
@@ -31,24 +27,3 @@ def summary_text(result, problem) -> str:
             lines.append(f"  n = {p.phases}: {p.status}: {p.message}")
     lines.append("every figure above is the exact evaluator's, not the NLP surrogate's")
     return "\n".join(lines)
-
-
-def write_outputs(result, problem, out_dir: str | Path, plots: bool = True) -> list[Path]:
-    """result.json, summary.txt and (for a design) speeds.png and mechanism.png."""
-    out = Path(out_dir)
-    written = [atomic_write_json(out / "result.json", result.to_dict()),
-               atomic_write_text(out / "summary.txt", summary_text(result, problem) + "\n")]
-    if plots and result.design:
-        from ..plots import plot_mechanism, plot_speeds
-
-        import matplotlib.pyplot as plt
-        design = Design.from_problem(problem, result.design)
-        fig = plot_speeds(design, problem.stroke, problem.input_speed,
-                          title=f"{problem.name}: optimum, δ = {result.delta:.4f}, "
-                                f"ratio = {result.ratio:.4f}")
-        written.append(atomic_savefig(fig, out / "speeds.png"))
-        plt.close(fig)
-        fig = plot_mechanism(design, title=f"{problem.name}: optimum")
-        written.append(atomic_savefig(fig, out / "mechanism.png"))
-        plt.close(fig)
-    return written

@@ -12,10 +12,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..criteria import (TOL_ANGLE_DEG, TOL_LENGTH_REL, TOL_RATIO, Measured,  # noqa: F401
+from ..criteria import (TOL_ANGLE_DEG, TOL_LENGTH_REL, TOL_RATIO, Measured,
                         SectionConstraint, constraints_of, objective_of)
 from ..errors import AssemblyError
-from ..evaluation import Evaluation, eccentricities_of, evaluate_problem  # noqa: F401
+from ..evaluation import Evaluation, eccentricities_of, evaluate_problem
+
+#: the tolerances and the eccentricity order are the criteria's and the evaluation's; they are
+#: importable from here too, where the exact check is
+__all__ = ["TOL_ANGLE_DEG", "TOL_LENGTH_REL", "TOL_RATIO", "Verification", "eccentricities_of",
+           "start_guess", "verify"]
 
 
 @dataclass

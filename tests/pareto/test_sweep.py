@@ -47,7 +47,7 @@ def test_ratio_bound_binds_and_its_multiplier_is_the_local_slope(small_front):
 
 
 def test_json_and_report_are_written(small_front, small_path):
-    from optdesign.pareto.report import write_report
+    from optdesign.outputs import write_report
     result, out = small_front
     data = json.loads((out / "pareto.json").read_text())
     assert data["indicators"]["n_points"] == 4

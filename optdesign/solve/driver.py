@@ -23,6 +23,8 @@ from .screening import line_seeds, screen
 from .verify import Verification, start_guess, verify
 
 SUCCESS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+#: the status of a run stopped because it entered a known optimum's neighbourhood
+JOINED = "Joined_Known_Basin"
 MAX_REFINEMENTS = 4
 ANGLE_SAFETY_DEG = 0.01
 #: two polished optima are one basin when their designs differ by less than this (relative
@@ -76,6 +78,8 @@ class PhaseSolver:
         self.count = count
         self.timings = Timings()
         self._nlps: dict[int, PhaseNLP] = {}
+        #: optima found already: a run that reaches one of them is stopped (its basin is known)
+        self.avoid: list[dict] = []
 
     def nlp(self, sequences) -> PhaseNLP:
         """The NLP with enough hand-over slots for ``sequences`` (built at most once)."""
@@ -125,6 +129,9 @@ class PhaseSolver:
                 # L-BFGS wanders.
                 hessian = "exact"
                 continue
+            if status == JOINED:
+                note = "joined the basin of an optimum found from another start"
+                break
             if status not in SUCCESS:
                 note = run.binding
                 values, ver = (trial, new) if new.sequences else (values, ver)
@@ -151,16 +158,20 @@ class PhaseSolver:
         lbg, ubg = nlp.constraint_bounds(problem, ver.sequences, tightening)
         with self.timings.stage("build"):
             solver = nlp.solver(hessian)
+        nlp.watch.known = [np.array([v[k] for k in nlp.free]) / nlp.scale for v in self.avoid]
+        nlp.watch.joined = False
         with self.timings.stage("ipopt"):
             sol = solver(x0=np.clip(nlp.pack(guess), lbx, ubx), lbx=lbx, ubx=ubx, lbg=lbg,
                          ubg=ubg, p=params)
         stats = solver.stats()
         x = np.array(sol["x"]).ravel()
-        return _Run(status=stats["return_status"], iterations=int(stats["iter_count"]),
+        joined = nlp.watch.joined
+        return _Run(status=JOINED if joined else stats["return_status"],
+                    iterations=int(stats["iter_count"]),
                     lengths=nlp.lengths_of(x), surrogate=nlp.worst_ripple(x, params),
                     multiplier=nlp.multiplier(sol["lam_g"], "min_ratio"),
                     at_window=nlp.at_window_bound(x, lbx, ubx),
-                    binding=nlp.binding(np.array(sol["g"]).ravel(), lbg, ubg))
+                    binding="" if joined else nlp.binding(np.array(sol["g"]).ravel(), lbg, ubg))
 
 
 @dataclass
@@ -186,7 +197,11 @@ class _Polishing:
         self.polished = 0
 
     def polish(self, values: dict) -> Outcome:
-        outcome = self.solver.solve_from(dict(values))
+        self.solver.avoid = [o.values for o in self.optima]
+        try:
+            outcome = self.solver.solve_from(dict(values))
+        finally:
+            self.solver.avoid = []
         self.polished += 1
         self.result.starts.append(outcome.record)
         self.result.iterations += outcome.record.iterations

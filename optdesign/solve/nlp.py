@@ -97,6 +97,49 @@ class Quantities:
     cos_mu_sq: dict                 # eccentricity tag -> cos²μ of every chain at every sample
 
 
+class _Watch(ca.Callback):
+    """IPOPT's iteration callback: stops the run once its free lengths (scaled) lie within
+    ``radius`` of one of ``known``, optima already found from other starts. The run has
+    joined a known basin; following it to the end would find that optimum again."""
+
+    def __init__(self, n_x: int, n_g: int, lengths: slice, radius: float = 2e-2):
+        ca.Callback.__init__(self)
+        self.n_x, self.n_g, self.lengths, self.radius = n_x, n_g, lengths, radius
+        self.known: list[np.ndarray] = []
+        self.joined = False
+        self.construct("watch", {})
+
+    def get_n_in(self):
+        return ca.nlpsol_n_out()
+
+    def get_n_out(self):
+        return 1
+
+    def get_name_in(self, i):
+        return ca.nlpsol_out(i)
+
+    def get_name_out(self, i):
+        return "stop"
+
+    def get_sparsity_in(self, i):
+        name = ca.nlpsol_out(i)
+        if name == "f":
+            return ca.Sparsity.scalar()
+        if name in ("x", "lam_x"):
+            return ca.Sparsity.dense(self.n_x)
+        if name in ("g", "lam_g"):
+            return ca.Sparsity.dense(self.n_g)
+        return ca.Sparsity(0, 0)
+
+    def eval(self, arg):
+        if self.known:
+            x = np.array(arg[0]).ravel()[self.lengths]
+            if any(np.max(np.abs(x - k)) <= self.radius for k in self.known):
+                self.joined = True
+                return [1]
+        return [0]
+
+
 class _Builder:
     """Collects the NLP's variables, parameters and constraint rows, each a named block."""
 
@@ -168,6 +211,7 @@ class PhaseNLP:
         self.objective = objective_of(problem)
         self.layout = Layout()
         self._solvers: dict[str, ca.Function] = {}
+        self.watch: _Watch | None = None
         self._build()
 
     # ------------------------------------------------------------------ building
@@ -296,10 +340,17 @@ class PhaseNLP:
         return (w_hi - w_lo) / avg, mean, w_hi, cos_sq
 
     def solver(self, hessian: str) -> ca.Function:
-        """IPOPT on this NLP with the exact Hessian or L-BFGS; each built at its first use."""
+        """IPOPT on this NLP with the exact Hessian or L-BFGS; each built at its first use.
+
+        Every iteration passes through :attr:`watch`, which stops a run that has entered the
+        neighbourhood of an optimum found already (its basin is known)."""
         if hessian not in self._solvers:
+            if self.watch is None:
+                self.watch = _Watch(self.n_x, self.n_g, self.layout.find(self.layout.x,
+                                                                          "lengths"))
             opts = dict(IPOPT_OPTIONS) | {"ipopt.max_iter": self.problem.solver.max_iter,
-                                          "ipopt.hessian_approximation": hessian}
+                                          "ipopt.hessian_approximation": hessian,
+                                          "iteration_callback": self.watch}
             self._solvers[hessian] = ca.nlpsol(
                 f"nlp_n{self.count}", "ipopt",
                 {"x": self.x_sym, "p": self.p_sym, "f": self.f, "g": self.g}, opts)

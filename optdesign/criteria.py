@@ -177,8 +177,7 @@ class SectionConstraint(Constraint):
 def constraints_of(problem) -> list[Constraint]:
     """Every constraint of a problem: the general ones, the mechanism's, the sections'."""
     out: list[Constraint] = [TransmissionAngle(), RatioFloor()]
-    if problem.objective.max_ripple is not None and problem.objective.minimize == "-ratio":
-        out.append(RippleCap())
+    out += objective_of(problem).constraints(problem)
     out += problem.model.criteria(problem.constraints, problem.options)
     for key, section in problem.sections.items():
         if hasattr(section, "solve_constraints"):
@@ -191,9 +190,16 @@ class Objective:
     """What the NLP minimises, and the key that ranks verified designs (lower is better)."""
 
     name: str = ""
+    #: ``objective:`` keys this objective needs besides ``minimize``
+    requires: tuple[str, ...] = ()
 
     def expression(self, q):
         raise NotImplementedError
+
+    def constraints(self, problem) -> list[Constraint]:
+        """Constraints that come with this objective (e.g. the ripple cap of the largest
+        ratio)."""
+        return []
 
     def rank(self, delta: float, ratio: float) -> float:
         """The ranking key of a design with worst ripple ``delta`` and ratio ``ratio``."""
@@ -222,6 +228,11 @@ class LargestRatio(Objective):
 
     def expression(self, q):
         return -q.ratio + RIPPLE_TIE_BREAK * q.worst_ripple
+
+    requires = ("max_ripple",)
+
+    def constraints(self, problem):
+        return [RippleCap()]
 
     def rank(self, delta, ratio):
         return -ratio

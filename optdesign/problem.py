@@ -11,6 +11,7 @@ from importlib import import_module
 from pathlib import Path
 from typing import Any, Mapping
 
+from .criteria import OBJECTIVES
 from .errors import ProblemError
 from .mechanisms import get_mechanism
 
@@ -25,7 +26,6 @@ SECTION_PARSERS: dict[str, str] = {
 TOP_KEYS = {"name", "mechanism", "input_speed", "stroke", "design", "options", "constraints",
             "objective", "regulation", "solver"}
 RIPPLE_DEFINITIONS = ("midrange", "mean")
-OBJECTIVES = ("ripple", "-ratio")
 HESSIANS = ("exact", "limited-memory")
 
 
@@ -356,6 +356,10 @@ def _read_objective(r, raw) -> Objective:
         if kw["minimize"] not in OBJECTIVES:
             raise r.error("objective.minimize", f"must be one of {', '.join(OBJECTIVES)} "
                                                 f"(got {kw['minimize']!r})")
+        for key in OBJECTIVES[kw["minimize"]].requires:
+            if key not in raw:
+                raise r.error(f"objective.{key}",
+                              f"is required when minimize is {kw['minimize']}")
     if "ripple" in raw:
         kw["ripple"] = r.text(raw["ripple"], "objective.ripple")
         if kw["ripple"] not in RIPPLE_DEFINITIONS:
@@ -367,8 +371,6 @@ def _read_objective(r, raw) -> Objective:
             raise r.error("objective.min_ratio", f"must not be negative (got {kw['min_ratio']:g})")
     if "max_ripple" in raw:
         kw["max_ripple"] = r.number(raw["max_ripple"], "objective.max_ripple", positive=True)
-    if kw.get("minimize") == "-ratio" and "max_ripple" not in kw:
-        raise r.error("objective.max_ripple", "is required when minimize is -ratio")
     return Objective(**kw)
 
 

@@ -1,11 +1,19 @@
-"""The shape the code promises in docs/architecture.md: no import cycle, and a new constraint
-added in one place (a worked example a reader can copy)."""
+"""The shape the code promises in docs/architecture.md: no import cycle, and a new constraint,
+objective, mechanism or section added in one place each (worked examples a reader can copy)."""
 import ast
+import math
+from dataclasses import dataclass
 from pathlib import Path
 
-from optdesign.criteria import LengthConstraint
-from optdesign.mechanisms import get_mechanism
-from optdesign.problem import load_problem
+import casadi as ca
+import pytest
+import yaml
+
+from optdesign.analysis import analyze
+from optdesign.criteria import OBJECTIVES, LengthConstraint, Objective
+from optdesign.errors import ProblemError
+from optdesign.mechanisms import REGISTRY, Mechanism, VariableSpec, get_mechanism
+from optdesign.problem import SECTION_PARSERS, load_problem, problem_from_dict
 from optdesign.solve import solve, verify
 from tests.conftest import ROOT
 
@@ -60,3 +68,87 @@ def test_a_new_constraint_is_one_object(monkeypatch):
     assert r.design["l3"] >= 30.0 - 1e-6                 # the free optimum has l3 = 26.9
     assert r.delta > 0.140214                            # so the optimum moved
     assert "min_rocker" in verify(problem, r.design | {"l3": 25.0}).violations
+
+
+# --------------------------------------------------------------------------- a new objective
+class RipplePerRatio(Objective):
+    """Worked example: the least ripple per unit of ratio, δ/i."""
+
+    name = "ripple_per_ratio"
+
+    def expression(self, q):
+        return q.worst_ripple / q.ratio
+
+    def rank(self, delta, ratio):
+        return delta / ratio
+
+
+def test_a_new_objective_is_one_class_and_one_entry(monkeypatch):
+    monkeypatch.setitem(OBJECTIVES, "ripple_per_ratio", RipplePerRatio)
+    data = yaml.safe_load((ROOT / "problems" / "sharkov2022_disc.yaml").read_text())
+    data["objective"]["minimize"] = "ripple_per_ratio"
+    r = solve(problem_from_dict(data))
+    assert r.status == "optimal"
+    # the least-ripple optimum has δ/i = 0.140205/0.72889 = 0.19236: this one is no worse
+    assert r.delta / r.ratio <= 0.140205 / 0.72889 + 1e-6
+
+
+# --------------------------------------------------------------------------- a new mechanism
+class SineRockers(Mechanism):
+    """Worked example: n rockers θ_k = (a/100 mm)·sin(φ − 2πk/n), the least a mechanism says.
+
+    With the forward stroke ω_max = a/100·ω1 and ω_min = ω_max·cos(π/n) at the crossings, so
+    δ = 2(1 − cos(π/n))/(1 + cos(π/n)): a closed form to check against."""
+
+    name = "sine_rockers"
+    source = "worked example (docs/architecture.md)"
+    variables = (VariableSpec("a", "mm", "amplitude (regulated)"),
+                 VariableSpec("rockers", "-", "rockers and freewheels", integer=True, minimum=2))
+    count_variable = "rockers"
+    regulating_variable = "a"
+
+    def chain_expressions(self, phi, p, count, options):
+        theta = [p["a"] / 100 * ca.sin(phi - 2 * math.pi * k / count) for k in range(count)]
+        return {"theta": theta, "cos_mu": [ca.SX(0)] * count,
+                "joints": {"O": ca.vertcat(0, 0)}, "links": []}
+
+
+def test_a_new_mechanism_is_one_class_and_one_registry_line(monkeypatch):
+    monkeypatch.setitem(REGISTRY, "sine_rockers", "tests.test_architecture:SineRockers")
+    problem = problem_from_dict({"mechanism": "sine_rockers", "input_speed": 10.0,
+                                 "design": {"a": 50.0, "rockers": 3}})
+    figures = analyze(problem).strokes["forward"]
+    c = math.cos(math.pi / 3)
+    assert figures.delta == pytest.approx(2 * (1 - c) / (1 + c), abs=1e-12)
+    assert figures.omega_max == pytest.approx(0.5 * 10.0, rel=1e-12)
+
+
+# --------------------------------------------------------------------------- a new section
+@dataclass(frozen=True)
+class RpmSection:
+    """Worked example: a ``rpm:`` section that reports the output speeds in rpm."""
+
+    digits: int
+
+    def analyze(self, problem, result) -> dict:
+        f = result.strokes[problem.stroke]
+        to_rpm = 60 / (2 * math.pi)
+        return {"omega_max_rpm": round(f.omega_max * to_rpm, self.digits),
+                "omega_min_rpm": round(f.omega_min * to_rpm, self.digits)}
+
+
+def parse_rpm(raw, reader) -> RpmSection:
+    raw = reader.mapping(raw, "")
+    reader.known_keys(raw, "", {"digits"})
+    return RpmSection(reader.integer(raw.get("digits", 1), "digits", 0))
+
+
+def test_a_new_section_is_one_parser_and_one_registry_line(monkeypatch, tmp_path):
+    monkeypatch.setitem(SECTION_PARSERS, "rpm", "tests.test_architecture:parse_rpm")
+    data = yaml.safe_load((ROOT / "problems" / "sharkov2022.yaml").read_text())
+    data["rpm"] = {"digits": 2}
+    out = analyze(problem_from_dict(data)).sections["rpm"]
+    assert out["omega_max_rpm"] == pytest.approx(39.838 * 60 / (2 * math.pi), abs=0.01)
+    data["rpm"] = {"digits": "two"}
+    with pytest.raises(ProblemError, match=r"rpm\.digits must be an integer"):
+        problem_from_dict(data, where="p.yaml")

@@ -33,6 +33,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from optdesign.problem import Variable, load_problem  # noqa: E402
+from solve_vs_peers import cpu_seconds  # noqa: E402  (beside this script)
 
 PROBLEM = ROOT / "problems" / "sharkov2022_disc.yaml"
 PHASES = (3, 4, 6, 8, 12, 16, 24)
@@ -53,27 +54,17 @@ def make_problem(phases: int, samples: int | None, min_ratio: float | None):
     return problem
 
 
-def _cpu_s() -> float:
-    """CPU seconds of this process and its finished children (a solver using more than one
-    core shows CPU > wall time)."""
-    import resource
-
-    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(
-        resource.RUSAGE_CHILDREN)
-    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
-
-
 def child(spec: str) -> None:
     """In a fresh process: one timed solve, then the exact re-check; JSON on stdout."""
     from optdesign.solve import solve, verify
 
     phases, samples, min_ratio = json.loads(spec)
     problem = make_problem(phases, samples, min_ratio)
-    cpu0 = _cpu_s()
+    cpu0 = cpu_seconds()
     t0 = time.perf_counter()
     r = solve(problem)
     elapsed = time.perf_counter() - t0
-    cpu = _cpu_s() - cpu0
+    cpu = cpu_seconds() - cpu0
     timings = getattr(r, "timings_s", None)
     check = None
     if r.design is not None:

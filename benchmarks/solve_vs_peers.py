@@ -547,7 +547,7 @@ def best_within(points, t_max):
 
 
 # --------------------------------------------------------------------------- ours
-def _cpu_s() -> float:
+def cpu_seconds() -> float:
     """CPU seconds of this process and its finished children (a solver using more than one
     core shows CPU > wall time)."""
     import resource
@@ -562,12 +562,12 @@ def ours_child(case: str) -> None:
     from optdesign.solve import solve
 
     problem = load_case(case)
-    cpu0 = _cpu_s()
+    cpu0 = cpu_seconds()
     t0 = time.perf_counter()
     r = solve(problem)
     elapsed = time.perf_counter() - t0
-    cpu = _cpu_s() - cpu0
-    timings = getattr(r, "timings", None)
+    cpu = cpu_seconds() - cpu0
+    timings = getattr(r, "timings_s", None)
     print("@@OURS@@" + json.dumps({
         "status": r.status, "delta": r.delta, "ratio": r.ratio, "design": r.design,
         "time_s": elapsed, "cpu_s": cpu, "solve_time_s": r.solve_time_s,

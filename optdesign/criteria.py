@@ -74,10 +74,6 @@ class Constraint:
         values = v if isinstance(v, (list, tuple)) else [v]
         return max(max(lower - float(x), float(x) - upper) for x in values)
 
-    def report(self, problem, m: Measured) -> dict:
-        """Columns of this criterion in a result row."""
-        return {}
-
 
 class TransmissionAngle(Constraint):
     """min(μ, 180° - μ) >= μ_min of every chain over the whole turn, as |cos μ| <= cos μ_min
@@ -101,9 +97,6 @@ class TransmissionAngle(Constraint):
 
     def tolerance(self, m):
         return TOL_ANGLE_DEG
-
-    def report(self, problem, m):
-        return {"min_transmission_angle_deg": m.min_angle_deg}
 
 
 class RatioFloor(Constraint):
@@ -137,7 +130,7 @@ class LengthConstraint(Constraint):
     def __init__(self, name: str, formula, lower: float = 0.0, upper: float = math.inf,
                  column: str | None = None):
         self.name, self.formula, self.lower, self.upper = name, formula, lower, upper
-        self.column = column
+        self.column = column            # the result tables' column of this value, if any
 
     def value(self, q):
         return self.formula(q.lengths)
@@ -147,9 +140,6 @@ class LengthConstraint(Constraint):
 
     def tolerance(self, m):
         return TOL_LENGTH_REL * max(abs(v) for v in m.lengths.values())
-
-    def report(self, problem, m):
-        return {self.column: float(self.value(m))} if self.column else {}
 
 
 class SectionConstraint(Constraint):

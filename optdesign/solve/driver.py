@@ -11,11 +11,12 @@ from __future__ import annotations
 
 import time
 from contextlib import contextmanager
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
 from ..criteria import objective_of
+from ..mechanisms import STROKE_SIGNS
 from .accuracy import solve_accuracy
 from .nlp import PhaseNLP
 from .result import PhaseResult, SolveResult, StartRecord
@@ -55,8 +56,7 @@ class Timings:
             setattr(self, k, getattr(self, k) + v)
 
     def to_dict(self) -> dict:
-        return {"build": self.build, "screening": self.screening, "ipopt": self.ipopt,
-                "verification": self.verification}
+        return asdict(self)
 
 
 @dataclass
@@ -87,10 +87,9 @@ class PhaseSolver:
         for slots, nlp in self._nlps.items():
             if slots >= need:
                 return nlp
-        with self.timings.stage("build"):
-            nlp = PhaseNLP(self.problem, self.count)
-            if nlp.slots < need:                     # more hand-overs than curves
-                nlp = PhaseNLP(self.problem, self.count, need)
+        curves = self.count * len(STROKE_SIGNS[self.problem.stroke])
+        with self.timings.stage("build"):       # a slot per curve, more if the design has more
+            nlp = PhaseNLP(self.problem, self.count, max(need, curves))
         self._nlps[nlp.slots] = nlp
         return nlp
 
@@ -282,19 +281,16 @@ def _no_optimum(result: PhaseResult) -> PhaseResult:
     return result
 
 
-def _close(problem, a: dict, b: dict) -> bool:
-    free = problem.free_lengths()
-    return all(abs(a[k] - b[k]) <= 1e-3 * (problem.design[k].upper - problem.design[k].lower)
-               for k in free)
+def _close(problem, a: dict, b: dict, share: float = 1e-3) -> bool:
+    """Every free length of ``a`` and ``b`` within ``share`` of its box."""
+    return all(abs(a[k] - b[k]) <= share * (problem.design[k].upper - problem.design[k].lower)
+               for k in problem.free_lengths())
 
 
 def _same_optimum(problem, a: Outcome, b: Outcome) -> bool:
-    free = problem.free_lengths()
-    span = np.array([problem.design[k].upper - problem.design[k].lower for k in free])
-    da = np.array([a.values[k] for k in free]) - np.array([b.values[k] for k in free])
     ka, kb = a.verification.key, b.verification.key
-    return bool(np.all(np.abs(da) <= SAME_DESIGN * span) and
-                abs(ka - kb) <= SAME_KEY_REL * max(1e-3, abs(kb)))
+    return _close(problem, a.values, b.values, SAME_DESIGN) and \
+        abs(ka - kb) <= SAME_KEY_REL * max(1e-3, abs(kb))
 
 
 def _fixed_infeasible(problem, count: int) -> PhaseResult | None:

@@ -89,6 +89,7 @@ class SolverSettings:
     agree: int = 2                      # infeasible after agree + 1 local-infeasibility verdicts
     screen: int = 512                   # designs screened before IPOPT (Sobol sample)
     basins: int = 2                     # best basins of the screening polished (then lines)
+    workers: int = 0                    # processes polishing basins at once (0: every core)
     smoothing: float = 200.0            # log-sum-exp ρ, per unit of ω/ω1
     seed: int = 0
     max_iter: int = 100                 # IPOPT iterations per start
@@ -393,10 +394,10 @@ def _read_solver(r, raw) -> SolverSettings:
     raw = r.mapping(raw, "solver")
     r.known_keys(raw, "solver", {"samples", "starts", "agree", "smoothing", "seed",
                                       "max_iter", "hessian", "peak_samples", "screen",
-                                      "basins"})
+                                      "basins", "workers"})
     kw = {}
     for key, low in (("samples", 16), ("starts", 1), ("agree", 1), ("seed", 0),
-                     ("max_iter", 1), ("screen", 1), ("basins", 1)):
+                     ("max_iter", 1), ("screen", 1), ("basins", 1), ("workers", 0)):
         if key in raw:
             kw[key] = r.integer(raw[key], f"solver.{key}", low)
     if "smoothing" in raw:

@@ -16,6 +16,7 @@ from ..criteria import (TOL_ANGLE_DEG, TOL_LENGTH_REL, TOL_RATIO, Measured,
                         SectionConstraint, constraints_of, objective_of)
 from ..errors import AssemblyError
 from ..evaluation import Evaluation, eccentricities_of, evaluate_problem
+from .nlp import tag_of
 
 #: the tolerances and the eccentricity order are the criteria's and the evaluation's; they are
 #: importable from here too, where the exact check is
@@ -84,7 +85,7 @@ def start_guess(nlp, ver: Verification) -> dict:
     guess = {"lengths": [values[k] / s for k, s in zip(nlp.free, nlp.scale)],
              "worst_ripple": [ver.delta]}
     for e, x in zip(nlp.eccs, ev.per_e):
-        tag = f"e{e:g}"
+        tag = tag_of(e)
         fig = x.figures[ev.stroke]
         guess[f"w_{tag}"] = [fig.omega_max / (w1 * e), fig.omega_min / (w1 * e)]
         guess[f"phi_peak_{tag}"] = x.peak_angles

@@ -33,7 +33,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from optdesign.problem import Variable, load_problem  # noqa: E402
-from solve_vs_peers import cpu_seconds  # noqa: E402  (beside this script)
+from solve_vs_peers import timed_solve  # noqa: E402  (beside this script)
 
 PROBLEM = ROOT / "problems" / "sharkov2022_disc.yaml"
 PHASES = (3, 4, 6, 8, 12, 16, 24)
@@ -56,27 +56,17 @@ def make_problem(phases: int, samples: int | None, min_ratio: float | None):
 
 def child(spec: str) -> None:
     """In a fresh process: one timed solve, then the exact re-check; JSON on stdout."""
-    from optdesign.solve import solve, verify
+    from optdesign.solve import verify
 
     phases, samples, min_ratio = json.loads(spec)
     problem = make_problem(phases, samples, min_ratio)
-    cpu0 = cpu_seconds()
-    t0 = time.perf_counter()
-    r = solve(problem)
-    elapsed = time.perf_counter() - t0
-    cpu = cpu_seconds() - cpu0
-    timings = getattr(r, "timings_s", None)
+    r, run = timed_solve(problem)
     check = None
     if r.design is not None:
         v = verify(problem, r.design)
         check = {"feasible": bool(v.feasible), "delta": v.delta}
-    print("@@RUN@@" + json.dumps({
-        "status": r.status, "delta": r.delta, "ratio": r.ratio, "design": r.design,
-        "time_s": elapsed, "cpu_s": cpu, "iterations": getattr(r, "iterations", None),
-        "starts": sum(len(getattr(p, "starts", ())) for p in getattr(r, "per_phase", ())),
-        "timings": {k: float(v) for k, v in dict(timings).items()} if timings else None,
-        "verified": check, "samples": problem.solver.samples,
-        "min_ratio": problem.objective.min_ratio}))
+    print("@@RUN@@" + json.dumps(run | {"verified": check, "samples": problem.solver.samples,
+                                        "min_ratio": problem.objective.min_ratio}))
 
 
 def run(phases: int, samples: int | None, timeout: float, log) -> dict:

@@ -557,23 +557,26 @@ def cpu_seconds() -> float:
     return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
 
-def ours_child(case: str) -> None:
-    """Runs in a fresh process: our solve, timed around the call alone; JSON on stdout."""
+def timed_solve(problem):
+    """Our solve, timed around the call alone (wall and CPU): (result, summary dict)."""
     from optdesign.solve import solve
 
-    problem = load_case(case)
     cpu0 = cpu_seconds()
     t0 = time.perf_counter()
     r = solve(problem)
     elapsed = time.perf_counter() - t0
-    cpu = cpu_seconds() - cpu0
     timings = getattr(r, "timings_s", None)
-    print("@@OURS@@" + json.dumps({
+    return r, {
         "status": r.status, "delta": r.delta, "ratio": r.ratio, "design": r.design,
-        "time_s": elapsed, "cpu_s": cpu, "solve_time_s": r.solve_time_s,
+        "time_s": elapsed, "cpu_s": cpu_seconds() - cpu0, "solve_time_s": r.solve_time_s,
         "iterations": getattr(r, "iterations", None),
         "timings": {k: float(v) for k, v in dict(timings).items()} if timings else None,
-        "starts": sum(len(getattr(p, "starts", ())) for p in getattr(r, "per_phase", ()))}))
+        "starts": sum(len(getattr(p, "starts", ())) for p in getattr(r, "per_phase", ()))}
+
+
+def ours_child(case: str) -> None:
+    """Runs in a fresh process: our solve, timed around the call alone; JSON on stdout."""
+    print("@@OURS@@" + json.dumps(timed_solve(load_case(case))[1]))
 
 
 def run_ours(case: str) -> dict:

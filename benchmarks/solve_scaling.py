@@ -21,10 +21,8 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import subprocess
 import sys
-import tempfile
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -32,6 +30,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from optdesign.io import atomic_write_text  # noqa: E402
+from optdesign.outputs import save_figure  # noqa: E402
 from optdesign.problem import Variable, load_problem  # noqa: E402
 from solve_vs_peers import timed_solve  # noqa: E402  (beside this script)
 
@@ -161,19 +161,7 @@ def figure(by_n, by_samples, path: Path) -> None:
     axes[0].set_title("solve time against the phase count")
     axes[1].set_title("solve time against the samples")
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
-    fig.savefig(tmp, dpi=110)
-    plt.close(fig)
-    os.replace(tmp, path)
-
-
-def _atomic_write(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
-    with os.fdopen(fd, "w", encoding="utf-8") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
+    save_figure(fig, path, dpi=110, bbox_inches=None)
 
 
 def main(argv=None) -> int:
@@ -212,10 +200,10 @@ def main(argv=None) -> int:
     print(md)
     suffix = "_quick" if args.quick else ""
     out = ROOT / "benchmarks" / "results"
-    _atomic_write(out / f"solve_scaling{suffix}.md", md)
+    atomic_write_text(out / f"solve_scaling{suffix}.md", md)
     meta = {"python": sys.version.split()[0], "time": time.strftime("%Y-%m-%d %H:%M:%S"),
             "problem": str(PROBLEM.relative_to(ROOT))}
-    _atomic_write(out / f"solve_scaling{suffix}.json",
+    atomic_write_text(out / f"solve_scaling{suffix}.json",
                   json.dumps({"meta": meta, "by_phases": by_n, "by_samples": by_samples},
                              indent=1))
     fig_path = (out / "solve_scaling_quick.png") if args.quick else \

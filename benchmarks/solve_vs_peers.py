@@ -71,10 +71,8 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import subprocess
 import sys
-import tempfile
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -84,6 +82,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from optdesign.io import atomic_write_text  # noqa: E402
+from optdesign.outputs import save_figure  # noqa: E402
 from optdesign.problem import Variable, load_problem  # noqa: E402
 
 # --------------------------------------------------------------------------- problems
@@ -589,14 +589,6 @@ def run_ours(case: str) -> dict:
 
 
 # --------------------------------------------------------------------------- output
-def _atomic_write(path: Path, text: str | bytes) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
-    with os.fdopen(fd, "wb") as fh:
-        fh.write(text.encode() if isinstance(text, str) else text)
-    os.replace(tmp, path)
-
-
 def _fmt(x, spec=".6f"):
     return "-" if x is None else format(x, spec)
 
@@ -722,11 +714,7 @@ def figure(results: list[dict], path: Path) -> None:
         axes[2 * (j // cols) + 1, j % cols].axis("off")
     axes[0, 0].legend(fontsize=8)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
-    fig.savefig(tmp, dpi=110)
-    plt.close(fig)
-    os.replace(tmp, path)
+    save_figure(fig, path, dpi=110, bbox_inches=None)
 
 
 # --------------------------------------------------------------------------- main
@@ -809,10 +797,10 @@ def main(argv=None) -> int:
     print(header + md)
     suffix = "_quick" if args.quick else ""
     out = ROOT / "benchmarks" / "results"
-    _atomic_write(out / f"solve_vs_peers{suffix}.md", header + md + "\n")
+    atomic_write_text(out / f"solve_vs_peers{suffix}.md", header + md + "\n")
     meta = {"args": {k: v for k, v in vars(args).items() if k != "_ours"},
             "python": sys.version.split()[0], "time": time.strftime("%Y-%m-%d %H:%M:%S")}
-    _atomic_write(out / f"solve_vs_peers{suffix}.json",
+    atomic_write_text(out / f"solve_vs_peers{suffix}.json",
                   json.dumps({"meta": meta, "results": results}, indent=1, default=float))
     fig_path = (out / "solve_vs_peers_quick.png") if args.quick else \
         ROOT / "docs" / "figures" / "solve_vs_peers.png"

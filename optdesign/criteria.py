@@ -77,8 +77,9 @@ class Constraint:
 
 class TransmissionAngle(Constraint):
     """min(μ, 180° - μ) >= μ_min of every chain over the whole turn, as |cos μ| <= cos μ_min
-    at the NLP's samples (squared, so both toggle sides are one smooth row), tightened by the
-    deficit the exact check finds between samples; assembly with a margin, 1 - cos²μ >= m."""
+    at the NLP's exact extremes of cos μ (squared, so both toggle sides are one smooth row),
+    tightened by any deficit the exact check still finds; assembly with a margin,
+    1 - cos²μ >= m."""
 
     name = "transmission_angle"
     unit = "deg"

@@ -12,6 +12,9 @@ from .mechanisms import get_mechanism
 #: |cos μ| may exceed 1 by this much and still count as assembled: none, since past 1 the
 #: floored square root of geometry.circle_intersection puts a spurious spike in the speed
 ASSEMBLY_TOL = 0.0
+#: grids of at least this many angles are evaluated as NumPy lanes (the same arithmetic, a
+#: fixed cost per instruction that pays from a few hundred angles on); shorter ones by CasADi
+LANES_FROM = 256
 
 
 @dataclass(frozen=True)
@@ -64,6 +67,13 @@ class Design:
     def sample(self, phi: np.ndarray, eccentricity: float = 1.0) -> dict[str, np.ndarray]:
         """theta, dtheta, ddtheta (chains × samples) and cos_mu at the crank angles ``phi``."""
         phi = np.atleast_1d(np.asarray(phi, dtype=float))
+        if phi.size >= LANES_FROM:
+            try:
+                out = self.model.kinematic_lanes(self.count, self.option_key)(
+                    phi[None, :], self.p(eccentricity)[:, None])
+                return dict(zip(("theta", "dtheta", "ddtheta", "cos_mu"), out))
+            except NotImplementedError:
+                pass
         fmap = self.model.mapped(self.count, self.option_key, phi.size)
         out = fmap(phi[None, :], self.p(eccentricity))
         return {k: np.array(v) for k, v in zip(("theta", "dtheta", "ddtheta", "cos_mu"), out)}
@@ -73,6 +83,12 @@ class Design:
         out = np.array(self.model.packed(self.count, self.option_key)(
             float(phi), self.p(eccentricity))).ravel()
         return dict(zip(("theta", "dtheta", "ddtheta", "cos_mu"), out.reshape(4, -1)))
+
+    def chain_at(self, phi: float, k: int, eccentricity: float = 1.0) -> tuple[float, ...]:
+        """θ_k, dθ_k/dφ, d²θ_k/dφ², cos μ_k and d cos μ_k/dφ of chain k alone at one crank
+        angle (the other chains are not evaluated)."""
+        out = self.model.chain(self.count, self.option_key, k)(float(phi), self.p(eccentricity))
+        return tuple(float(v) for v in out)
 
     def cos_peaks(self, phi: np.ndarray, eccentricity: float = 1.0,
                   cos_mu: np.ndarray | None = None, near: float = 1e-3):
@@ -95,8 +111,7 @@ class Design:
                                 (row > 1.0 - near) & np.isfinite(row))[0]:
                 lo = phi[j - 1] - (two_pi if j == 0 else 0.0)
                 hi = phi[(j + 1) % n] + (two_pi if j == n - 1 else 0.0)
-                res = minimize_scalar(lambda x: -abs(self.at(x % two_pi, eccentricity)
-                                                     ["cos_mu"][k]),
+                res = minimize_scalar(lambda x: -abs(self.chain_at(x % two_pi, k, eccentricity)[3]),
                                       bounds=(lo, hi), method="bounded",
                                       options={"xatol": 1e-12})
                 x, c = (res.x, -res.fun) if -res.fun > row[j] else (phi[j], row[j])
@@ -131,7 +146,7 @@ class Design:
         if j > 0:
             for _ in range(40):
                 mid = 0.5 * (lo + hi)
-                if abs(self.at(mid, eccentricity)["cos_mu"][chain]) <= 1.0:
+                if abs(self.chain_at(mid, chain, eccentricity)[3]) <= 1.0:
                     lo = mid
                 else:
                     hi = mid
@@ -162,7 +177,7 @@ class Design:
             j = int(np.argmax(np.abs(cos_mu[k])))
             lo = phi[j - 1] - (two_pi if j == 0 else 0.0)
             hi = phi[(j + 1) % n] + (two_pi if j == n - 1 else 0.0)
-            res = minimize_scalar(lambda x: -abs(self.at(x % two_pi, eccentricity)["cos_mu"][k]),
+            res = minimize_scalar(lambda x: -abs(self.chain_at(x % two_pi, k, eccentricity)[3]),
                                   bounds=(lo, hi), method="bounded", options={"xatol": 1e-10})
             c = min(max(-res.fun, abs(cos_mu[k, j])), 1.0)
             worst.append(np.degrees(np.arccos(c)))          # min(μ, 180° - μ) = acos|cos μ|

@@ -66,6 +66,15 @@ class _Curves:
         f, df = self.stack(out)
         return f[:, 0], df[:, 0], out["theta"]
 
+    def one(self, phi: float, c: int) -> tuple[float, float]:
+        """f_c and f_c' at one angle from curve c's own chain (the root searches' inner
+        loop: the other chains are not evaluated)."""
+        if c == self.m - 1:
+            return 0.0, 0.0
+        k, s = self.split(c)
+        _, dtheta, ddtheta, _, _ = self.design.chain_at(phi, k, self.ecc)
+        return s * dtheta, s * ddtheta
+
 
 def search_grid(design, eccentricity: float = 1.0, n_grid: int = DEFAULT_GRID) -> np.ndarray:
     """The crank angles the exact evaluator brackets its roots on: ``n_grid`` equal steps and
@@ -153,8 +162,8 @@ def _runs(curves: _Curves, phi: np.ndarray, f: np.ndarray) -> list[Run]:
 def _resolve(curves, lo, hi, a, b, depth) -> list[tuple[float, int]]:
     """Switch points in [lo, hi] where the envelope goes from curve a to curve b."""
     def gap(x):
-        f, _, _ = curves.point(x % TWO_PI)
-        return f[a] - f[b]
+        x %= TWO_PI
+        return curves.one(x, a)[0] - curves.one(x, b)[0]
 
     x = brentq(gap, lo, hi, xtol=1e-14, rtol=4 * np.finfo(float).eps) \
         if gap(lo) * gap(hi) < 0 else (lo if gap(lo) == 0 else hi)
@@ -192,7 +201,7 @@ def _stationary_values(curves: _Curves, run: Run, phi: np.ndarray, df: np.ndarra
     ds = np.concatenate([[ends[0]], df[c, idx], [ends[1]]])
 
     def slope(x):
-        return curves.point(x % TWO_PI)[1][c]
+        return curves.one(x % TWO_PI, c)[1]
 
     out = []
     for i in range(xs.size - 1):

@@ -84,7 +84,7 @@ class Objective:
 
 @dataclass(frozen=True)
 class SolverSettings:
-    samples: int = 90                   # crank samples per turn in the NLP (benchmarks/accuracy)
+    samples: int = 30                   # crank samples per turn in the NLP (docs/accuracy.md)
     starts: int = 8                     # most IPOPT polishes per phase count
     agree: int = 2                      # infeasible after agree + 1 local-infeasibility verdicts
     screen: int = 512                   # designs screened before IPOPT (Sobol sample)

@@ -14,6 +14,8 @@ from typing import ClassVar, Mapping
 
 import casadi as ca
 
+from ..lanes import Lanes
+
 #: Signs applied to the rocker speeds for each stroke: the freewheels pass the rocker's motion
 #: in that direction only; ``both`` is a second output shaft through a 1:1 reversing gear pair.
 STROKE_SIGNS: dict[str, tuple[int, ...]] = {"forward": (1,), "reverse": (-1,), "both": (1, -1)}
@@ -136,6 +138,18 @@ class Mechanism(ABC):
         _, dtheta, _, cos_mu = full(phi, pvec)
         return ca.Function(f"{self.name}_speeds_n{count}", [phi, pvec], [dtheta, cos_mu],
                            ["phi", "p"], ["dtheta", "cos_mu"])
+
+    @lru_cache(maxsize=64)
+    def kinematic_lanes(self, count: int, options: tuple[tuple[str, str], ...] = ()) -> Lanes:
+        """:meth:`kinematics` as NumPy lanes, for grids of many crank angles."""
+        return Lanes(self.kinematics(count, options))
+
+    @lru_cache(maxsize=64)
+    def speed_lanes(self, count: int, options: tuple[tuple[str, str], ...] = ()) -> Lanes:
+        """:meth:`speeds` as NumPy lanes: thousands of (φ, p) columns in one call, for
+        screening (raises :class:`NotImplementedError` where the function has instructions
+        the lanes do not translate)."""
+        return Lanes(self.speeds(count, options))
 
     @lru_cache(maxsize=64)
     def chain(self, count: int, options: tuple[tuple[str, str], ...], k: int) -> ca.Function:

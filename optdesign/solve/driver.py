@@ -160,7 +160,7 @@ class PhaseSolver:
         nlp.watch.known = [np.array([v[k] for k in nlp.free]) / nlp.scale for v in self.avoid]
         nlp.watch.joined = False
         with self.timings.stage("ipopt"):
-            sol = solver(x0=np.clip(nlp.pack(guess), lbx, ubx), lbx=lbx, ubx=ubx, lbg=lbg,
+            sol = solver(x0=nlp.start(guess, lbx, ubx, params), lbx=lbx, ubx=ubx, lbg=lbg,
                          ubg=ubg, p=params)
         stats = solver.stats()
         x = np.array(sol["x"]).ravel()
@@ -287,10 +287,12 @@ def workers_for(problem) -> int:
 
 
 def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
-                workers: int | None = None) -> PhaseResult:
+                workers: int | None = None, neighbours: list[dict] = ()) -> PhaseResult:
     """Best verified optimum of one phase count: screen, then polish the best basins (in
     ``workers`` processes at once; default :func:`workers_for`; 1 with a given ``solver``,
-    whose built NLPs are kept for re-use)."""
+    whose built NLPs are kept for re-use). ``neighbours``: optima of other phase counts,
+    screened with the box (continuation: the optimum of n - 1 often lies in the best basin
+    of n, and ranks first when it does)."""
     if not problem.free_lengths():
         fixed = _fixed_infeasible(problem, count)
         if fixed is not None:
@@ -299,7 +301,7 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
         workers = 1 if solver is not None else workers_for(problem)
     solver = solver or PhaseSolver(problem, count)
     with solver.timings.stage("screening"):
-        screening = screen(problem, count, problem.solver.screen)
+        screening = screen(problem, count, problem.solver.screen, extra=list(neighbours))
     result = PhaseResult(count, "failed", screening=screening.to_dict())
     work = _Polishing(problem, count, solver, result, workers)
     work.basins(screening.seeds)
@@ -374,7 +376,8 @@ def solve(problem, progress=None) -> SolveResult:
     t0 = time.perf_counter()
     per_phase = []
     for n in problem.counts():
-        per_phase.append(solve_phase(problem, n))
+        neighbours = [p.design for p in per_phase[-1:] if p.status == "optimal"]
+        per_phase.append(solve_phase(problem, n, neighbours=neighbours))
         if progress:
             progress()
     ok = [p for p in per_phase if p.status == "optimal"]

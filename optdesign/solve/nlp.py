@@ -94,7 +94,7 @@ class Quantities:
     ratio: ca.MX                    # time mean / ω1 at e = 1
     worst_ripple: ca.MX             # epigraph variable t >= δ_e for every listed e
     peak_speed: ca.MX               # ω_max at e = 1, rad/s
-    cos_mu_sq: dict                 # eccentricity tag -> cos²μ of every chain at every sample
+    cos_mu_sq: dict                 # eccentricity tag -> cos²μ of every chain at its extremes
 
 
 class _Watch(ca.Callback):
@@ -271,6 +271,7 @@ class PhaseNLP:
         functions = (self._sample_function(fn).map(self.phi.size), self._points_function(),
                      self._slot_function(fn).map(self.slots))
         ripples, means, peaks, cos_sq = [], [], [], {}
+        self._derived: dict[str, ca.MX] = {}
         for e in self.eccs:
             pvec = ca.vertcat(*[lengths[k] * (e if k == self.model.regulating_variable else 1)
                                 for k in self.model.lengths])
@@ -288,6 +289,8 @@ class PhaseNLP:
                 b.row(name, ca.vertcat(expr))
                 self._criterion_blocks.append((name, criterion))
         self.x_sym, self.p_sym = ca.vertcat(*b.x), ca.vertcat(*b.p)
+        #: the auxiliary variables' values as functions of the others, to start them on
+        self._fill = ca.Function("fill", [self.x_sym, self.p_sym], list(self._derived.values()))
         self.g = ca.vertcat(*b.g)
         self.f = self.objective.expression(q)
         self.n_x, self.n_g, self.n_p = self.x_sym.numel(), self.g.numel(), self.p_sym.numel()
@@ -306,7 +309,12 @@ class PhaseNLP:
         w = b.variable(f"w_{tag}", 2)
         w_hi, w_lo = w[0], w[1]
         cos_mu_sq, lse, f_samples = sample_map(self.phi[None, :], pvec, 1.0 / e)
-        cos_sq = ca.vec(cos_mu_sq)
+        # cos μ: where it moves with the crank, its two extremes per chain are tracked at
+        # exact stationary points (below) and hold the bound between samples; rows at every
+        # sample would repeat them at many times the cost (a switch of the extreme to another
+        # local peak is caught by the exact check, which re-solves). Where it does not move,
+        # one sample is its value.
+        cos_sq = ca.MX(0, 1) if self.has_mu else ca.vec(cos_mu_sq[:, 0])
         b.row(f"trough_samples[{tag}]", ca.vec(lse) - w_lo)
         if self.problem.solver.peak_samples:      # a safety net: ω_max bounded at every sample
             b.row(f"peak_samples[{tag}]", ca.vec(w_hi - f_samples))
@@ -335,7 +343,14 @@ class PhaseNLP:
         th_next = ca.sum1(after * ca.horzcat(th[:, 1:], th[:, :1])).T
         th_first = ca.sum1(after * ca.repmat(th[:, 0], 1, M)).T
         th_end = (1 - last) * th_next + last * th_first
-        mean = ca.dot(active, _wrap(th_end - th_start)) / (2 * math.pi * e)
+        # The mean as a running sum over the runs, one variable per slot (s_i = s_{i-1} +
+        # increment_i): the same value as one sum, but no row then reads every hand-over
+        # angle, so the Jacobian needs a few forward directions instead of one per slot.
+        increments = active * _wrap(th_end - th_start)
+        sums = b.variable(f"run_sums_{tag}", M)
+        b.row(f"run_sums[{tag}]", sums - ca.vertcat(0, sums[:-1]) - increments)
+        self._derived[f"run_sums_{tag}"] = ca.cumsum(increments)
+        mean = sums[M - 1] / (2 * math.pi * e)
         avg = 0.5 * (w_hi + w_lo) if self.problem.objective.ripple == "midrange" else mean
         return (w_hi - w_lo) / avg, mean, w_hi, cos_sq
 
@@ -386,8 +401,8 @@ class PhaseNLP:
         lbg, ubg = np.zeros(self.n_g), np.full(self.n_g, np.inf)
         for e, seq in zip(self.eccs, sequences):
             tag = tag_of(e)
-            for block in ("peak_stationary", "mu_stationary"):
-                if self.has_mu or block == "peak_stationary":
+            for block in ("peak_stationary", "mu_stationary", "run_sums"):
+                if self.has_mu or block != "mu_stationary":
                     lbg[L.find(L.g, f"{block}[{tag}]")] = ubg[L.find(L.g, f"{block}[{tag}]")] = 0.0
             rows = L.find(L.g, f"trough_handovers[{tag}]")
             idle = np.ones(self.slots, bool)
@@ -422,6 +437,13 @@ class PhaseNLP:
             lbx[sl] = np.where(active, centre - half_window, centre)
             ubx[sl] = np.where(active, centre + half_window, centre)
             lbx[L.find(L.x, f"w_{tag}")] = 0.0
+            # each increment is a wrapped angle, |Δθ| <= π, so the i-th running sum lies in
+            # ±(i + 1)π: bounds that are never active at a solution but keep a linear
+            # objective in the sum (largest ratio) from long excursions (pulse reducer: 18
+            # IPOPT iterations with them, 200 without)
+            reach = math.pi * np.arange(1, self.slots + 1)
+            sl = L.find(L.x, f"run_sums_{tag}")
+            lbx[sl], ubx[sl] = -reach, reach
         return lbx, ubx
 
     def at_window_bound(self, x, lbx, ubx, tol: float = 1e-6) -> bool:
@@ -443,10 +465,26 @@ class PhaseNLP:
                 for k, v, s in zip(self.free, x[sl], self.scale)}
 
     def pack(self, guess: dict) -> np.ndarray:
+        """x from the guessed blocks; the auxiliary ones (running sums) are left at zero for
+        :meth:`complete`."""
         x0 = np.zeros(self.n_x)
         for block in self.layout.x:
+            if block.name in self._derived:
+                continue
             value = np.atleast_1d(np.asarray(guess[block.name], dtype=float))
             x0[block.start:block.start + value.size] = value[:block.size]
+        return x0
+
+    def start(self, guess: dict, lbx, ubx, p) -> np.ndarray:
+        """The initial x of a run: the guess within its bounds, the auxiliary variables
+        consistent with the rest."""
+        return self.complete(np.clip(self.pack(guess), lbx, ubx), p)
+
+    def complete(self, x0: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """``x0`` with its auxiliary variables set consistently with the others."""
+        x0 = np.array(x0, dtype=float)
+        for name, value in zip(self._derived, self._fill.call([x0, p])):
+            x0[self.layout.find(self.layout.x, name)] = np.array(value).ravel()
         return x0
 
     def worst_ripple(self, x, p) -> float:

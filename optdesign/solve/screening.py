@@ -96,8 +96,7 @@ def _evaluate(problem, count, base, free, X) -> tuple[np.ndarray, np.ndarray]:
     S = X.shape[0]
     curves = count * len(STROKE_SIGNS[problem.stroke])
     N = max(SCREEN_SAMPLES, SAMPLES_PER_CURVE * curves)
-    fn = model.speeds(count, tuple(sorted(problem.options.items())))
-    fmap = fn.map(S * N, "thread", 2)
+    fmap = _speeds_at_once(model, count, tuple(sorted(problem.options.items())))
     phi = np.tile(np.linspace(0.0, 2 * np.pi, N, endpoint=False), S)[None, :]
     lengths = {k: np.full(S, base[k], dtype=float) for k in model.lengths}
     for j, k in enumerate(free):
@@ -139,6 +138,16 @@ def _evaluate(problem, count, base, free, X) -> tuple[np.ndarray, np.ndarray]:
     violation = np.where(np.isnan(violation), np.inf, violation)
     score = np.where(np.isfinite(score), score, np.inf)
     return score, violation
+
+
+def _speeds_at_once(model, count: int, options: tuple):
+    """The mechanism's speed function evaluated at many (φ, p) columns in one call: NumPy
+    lanes (:mod:`optdesign.lanes`), or CasADi's ``map`` for a function they cannot read."""
+    try:
+        return model.speed_lanes(count, options)
+    except NotImplementedError:
+        fn = model.speeds(count, options)
+        return lambda phi, p: fn.map(np.shape(p)[1])(phi, p)
 
 
 def _crossings(f: np.ndarray) -> np.ndarray:

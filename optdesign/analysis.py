@@ -9,10 +9,11 @@ from .design import Design
 from .envelope import StrokeFigures
 from .errors import ProblemError
 from .evaluation import evaluate
+from .tabular import Tabular
 
 
 @dataclass
-class AnalysisResult:
+class AnalysisResult(Tabular):
     """What ``analyze`` prints: the contract's keys first (docs/contract.md)."""
 
     assembles: bool
@@ -25,6 +26,26 @@ class AnalysisResult:
     regulation: list[dict] = field(default_factory=list)
     failure: dict | None = None
     sections: dict[str, dict] = field(default_factory=dict)
+    #: the problem file's constraints checked on this design by the exact evaluator: name,
+    #: satisfied, margin (>= 0 when satisfied; negative: by how much it is violated), unit
+    constraints: list[dict] = field(default_factory=list)
+
+    def summary(self) -> str:
+        lengths = ", ".join(f"{k} = {v:g}" for k, v in self.design.items())
+        if not self.assembles:
+            return f"{self.mechanism} ({lengths}): does not assemble: {self.failure['message']}"
+        return (f"{self.mechanism} ({lengths}): least transmission angle "
+                f"{self.min_transmission_angle_deg:.2f}°")
+
+    def to_frame(self):
+        """One row per listed eccentricity and stroke: the exact ω_max, ω_min, midrange and
+        time mean (rad/s), δ (midrange and mean) and the ratio."""
+        import pandas as pd
+
+        rows = [{"eccentricity": r["eccentricity"], "stroke": stroke,
+                 "min_transmission_angle_deg": r["min_transmission_angle_deg"], **figures}
+                for r in self.regulation for stroke, figures in r["strokes"].items()]
+        return pd.DataFrame(rows)
 
     def to_dict(self) -> dict:
         out = {
@@ -39,6 +60,7 @@ class AnalysisResult:
         }
         if self.failure:
             out["failure"] = self.failure
+        out["constraints"] = self.constraints
         out.update(self.sections)
         return out
 
@@ -84,7 +106,27 @@ def analyze(problem, values: dict | None = None) -> AnalysisResult:
     for key, section in problem.sections.items():
         if hasattr(section, "analyze"):
             result.sections[key] = section.analyze(problem, result)
+    result.constraints = check_constraints(problem, dict(design.values))
     return result
+
+
+def check_constraints(problem, values: dict) -> list[dict]:
+    """Every constraint of the problem (:func:`optdesign.criteria.constraints_of`) checked
+    exactly on ``values``, as the solver's verification checks an optimum."""
+    from .criteria import constraints_of
+    from .solve.verify import verify
+
+    ver = verify(problem, values)
+    if ver.measured is None:
+        return []
+    out = []
+    for criterion in constraints_of(problem):
+        amount = float(criterion.violation(problem, ver.measured))
+        out.append({"name": criterion.name,
+                    "satisfied": amount <= criterion.tolerance(ver.measured),
+                    "margin": 0.0 - amount if np.isfinite(amount) else None,
+                    "unit": criterion.unit or "-"})
+    return out
 
 
 def format_analysis(result: AnalysisResult, name: str = "") -> str:
@@ -105,6 +147,14 @@ def format_analysis(result: AnalysisResult, name: str = "") -> str:
             lines.append(f"  {stroke:<8} {f['omega_max']:8.3f} {f['omega_min']:8.3f} "
                          f"{f['omega_avg']:8.3f} {f['omega_mean']:8.3f} {f['delta']:7.4f} "
                          f"{f['delta_mean']:7.4f} {f['ratio']:7.4f}")
+    if result.constraints:
+        lines.append("")
+        lines.append("constraints of the problem file:")
+        for c in result.constraints:
+            margin = "" if c["margin"] is None else \
+                f" (margin {c['margin']:+.4g}{'' if c['unit'] == '-' else ' ' + c['unit']})"
+            lines.append(f"  {c['name']:<24} {'satisfied' if c['satisfied'] else 'VIOLATED'}"
+                         f"{margin}")
     for key, section in result.sections.items():
         lines.append("")
         lines.append(f"{key}: " + ", ".join(f"{k} = {v:.4g}" if isinstance(v, float) else

@@ -6,6 +6,7 @@ result is still written); 2 bad input or usage, one line on stderr naming file a
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from importlib import import_module
 
@@ -41,6 +42,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    os.environ.setdefault("MPLBACKEND", "Agg")      # the command writes figures to files only
     try:
         return int(args.run(args))
     except ProblemError as exc:

@@ -129,9 +129,10 @@ class LengthConstraint(Constraint):
     ``formula(lengths)`` uses arithmetic only. Mechanisms contribute these."""
 
     def __init__(self, name: str, formula, lower: float = 0.0, upper: float = math.inf,
-                 column: str | None = None):
+                 column: str | None = None, unit: str = "mm"):
         self.name, self.formula, self.lower, self.upper = name, formula, lower, upper
         self.column = column            # the result tables' column of this value, if any
+        self.unit = unit                # of the formula's value: mm, or "-" for a ratio
 
     def value(self, q):
         return self.formula(q.lengths)

@@ -12,9 +12,9 @@ from .mechanisms import STROKE_SIGNS
 
 
 def pyplot():
-    """matplotlib.pyplot on the Agg backend (files only, no display), imported on first use."""
-    import matplotlib
-    matplotlib.use("Agg")
+    """matplotlib.pyplot, imported on first use. The backend is never switched here: a
+    notebook keeps its own (the ``optdesign`` command selects Agg, files only, before any
+    figure is made)."""
     import matplotlib.pyplot as plt
     return plt
 

@@ -89,7 +89,7 @@ class PulseReducer(Mechanism):
         from ..criteria import LengthConstraint
 
         return [LengthConstraint("crank_inside_pivots", lambda p: 1 - p["r1"] / p["a"],
-                                 lower=constraints.assembly_margin)]
+                                 lower=constraints.assembly_margin, unit="-")]
 
     def check_values(self, values, count):
         if values["r1"] >= values["a"]:

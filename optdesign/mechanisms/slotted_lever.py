@@ -80,7 +80,7 @@ class SlottedLever(Mechanism):
         from ..criteria import LengthConstraint
 
         return [LengthConstraint("pivot_outside_circle", lambda p: 1 - p["L"] / p["XD"],
-                                 lower=constraints.assembly_margin)]
+                                 lower=constraints.assembly_margin, unit="-")]
 
     def check_values(self, values, count):
         if values["XD"] <= values["L"]:

@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..tabular import Tabular
 from .indicators import indicators, non_dominated, objectives
 
 #: leading columns of pareto.csv (docs/contract.md names the first nine); the
@@ -48,7 +49,7 @@ def frame(records: list[dict], lengths: list[str]):
 
 
 @dataclass
-class ParetoResult:
+class ParetoResult(Tabular):
     """What ``optdesign pareto`` found: the points, their indicators, how the run was made."""
 
     points: object                        # pandas DataFrame (see :func:`frame`)
@@ -67,6 +68,26 @@ class ParetoResult:
         """The knee (best compromise) row of the overall front, or None."""
         k = self.indicators.get("knee")
         return None if k is None else self.points.loc[k]
+
+    def summary(self) -> str:
+        ind = self.indicators
+        n = ind.get("n_points", 0)
+        if not n:
+            return "no verified point on the front"
+        hv = ind.get("hypervolume")
+        return (f"{n} non-dominated designs" +
+                (f", hypervolume {hv:.4f} (normalised, reference (1.1, 1.1))" if hv else ""))
+
+    def to_frame(self):
+        """Every point of the sweep (a copy of :attr:`points`)."""
+        return self.points.copy()
+
+    def _repr_html_(self) -> str:
+        import html
+
+        table = self.front.to_html(float_format=lambda v: f"{v:.6g}", na_rep="–",
+                                   index=False, border=0)
+        return f"<p><b>{html.escape(self.summary())}</b></p>\n{table}"
 
     def to_dict(self) -> dict:
         df = self.points.replace({np.nan: None})

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 
+from ..tabular import Tabular
+
 
 @dataclass
 class StartRecord:
@@ -48,7 +50,7 @@ class PhaseResult:
 
 
 @dataclass
-class SolveResult:
+class SolveResult(Tabular):
     """What ``optdesign solve`` writes to result.json (docs/contract.md)."""
 
     name: str
@@ -75,6 +77,31 @@ class SolveResult:
         if self.design is None:
             return None
         return next(p for p in self.per_phase if p.design == self.design)
+
+    def summary(self) -> str:
+        if self.design is None:
+            return f"{self.name}: {self.status}" + (f" ({self.message})" if self.message else "")
+        return (f"{self.name}: {self.status}, δ = {self.delta:.6g}, ratio = {self.ratio:.6g}, "
+                f"least transmission angle {self.min_transmission_angle_deg:.2f}° "
+                f"({self.solve_time_s:.2f} s)")
+
+    def to_frame(self):
+        """One row per phase count: status, exact δ, ratio, least transmission angle, the
+        lengths in mm, IPOPT iterations, and why a count has no optimum."""
+        import pandas as pd
+
+        from ..mechanisms import get_mechanism
+
+        lengths = get_mechanism(self.mechanism).lengths
+        rows = []
+        for p in self.per_phase:
+            row = {"phases": p.phases, "status": p.status, "delta": p.delta, "ratio": p.ratio,
+                   "min_transmission_angle_deg": p.min_transmission_angle_deg}
+            row |= {f"{k}_mm": (p.design or {}).get(k) for k in lengths}
+            row |= {"iterations": p.iterations, "best": p.design is not None and
+                    p.design == self.design, "message": p.message}
+            rows.append(row)
+        return pd.DataFrame(rows)
 
     def to_dict(self) -> dict:
         out = asdict(self)

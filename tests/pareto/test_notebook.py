@@ -16,11 +16,11 @@ def test_design_space_notebook_executes(small_front, small_path, monkeypatch):
     except NoSuchKernel:                 # a fresh venv without a kernelspec: install one
         from ipykernel.kernelspec import install
         install(prefix=sys.prefix)
-    monkeypatch.setenv("OPTDESIGN_FRONT", str(small_front[1] / "pareto.csv"))
-    monkeypatch.setenv("OPTDESIGN_PROBLEM", str(small_path))
     monkeypatch.setenv("PYTHONPATH", str(ROOT))
-    monkeypatch.setenv("MPLBACKEND", "Agg")
     nb = nbformat.read(ROOT / "notebooks" / "design_space.ipynb", as_version=4)
+    inputs = next(c for c in nb.cells if c.cell_type == "code")
+    assert "PROBLEM =" in inputs.source and "FRONT =" in inputs.source
+    inputs.source = f"PROBLEM = {str(small_path)!r}\nFRONT = {str(small_front[1])!r}"
     client = nbclient.NotebookClient(nb, kernel_name="python3", timeout=120,
                                      resources={"metadata": {"path": str(ROOT / "notebooks")}})
     client.execute()
@@ -30,3 +30,9 @@ def test_design_space_notebook_executes(small_front, small_path, monkeypatch):
     assert "non-dominated designs, hypervolume" in text and "feasible: True" in text
     images = [o for o in outputs if "image/png" in o.get("data", {})]
     assert len(images) >= 4             # fronts, lengths, speeds, mechanism
+    tables = [o for o in outputs if "text/html" in o.get("data", {})]
+    assert any("non-dominated designs" in o["data"]["text/html"] for o in tables)
+    source = "".join(c.source for c in nb.cells if c.cell_type == "code")
+    imports = {line.split()[1] for line in source.splitlines()
+               if line.startswith(("from optdesign", "import optdesign"))}
+    assert imports == {"optdesign"}     # the public API only

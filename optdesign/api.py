@@ -1,0 +1,107 @@
+"""The Python API, what a notebook imports::
+
+    from optdesign import load_problem, analyze, solve, pareto
+
+    problem = load_problem("problems/sharkov2022_disc.yaml")
+    result = solve(problem)              # SolveResult: .delta, .design, .to_frame(), .to_dict()
+    result                               # in Jupyter: a table of the optimum per phase count
+    front = pareto(problem, points=8)    # ParetoResult: .front, .knee, .to_frame()
+    analyze(problem, result.design)      # AnalysisResult: the exact figures of one design
+
+Every function takes a problem as a :class:`~optdesign.problem.Problem`, a path to a problem
+file, or a mapping with the file's keys (validated by the same loader: a bad key raises
+:class:`~optdesign.errors.ProblemError` naming it). Nothing here selects a matplotlib backend
+or writes a file unless asked to (``pareto(out=...)``). docs/api.md has the whole reference.
+"""
+from __future__ import annotations
+
+import tempfile
+from collections.abc import Mapping
+from pathlib import Path
+
+from .problem import Problem, problem_from_dict
+from .problem import load_problem as _load_file
+
+__all__ = ["analyze", "as_problem", "load_problem", "pareto", "plot_front", "plot_mechanism",
+           "plot_speeds", "solve"]
+
+
+def load_problem(source) -> Problem:
+    """A problem from a file path, or from a mapping with the problem file's keys."""
+    if isinstance(source, Problem):
+        return source
+    if isinstance(source, Mapping):
+        return problem_from_dict(dict(source), where="<dict>")
+    if isinstance(source, (str, Path)):
+        return _load_file(source)
+    raise TypeError(f"a problem is a Problem, a path or a mapping (got {type(source).__name__})")
+
+
+as_problem = load_problem
+
+
+def analyze(problem, design: Mapping | None = None):
+    """Exact figures of the problem's own design, or of ``design`` (lengths and count; the
+    keys a :class:`SolveResult` ``.design`` has). Returns an
+    :class:`~optdesign.analysis.AnalysisResult`."""
+    from .analysis import analyze as _analyze
+
+    return _analyze(load_problem(problem), None if design is None else dict(design))
+
+
+def solve(problem, progress=None):
+    """The best verified design over every admissible phase count
+    (:func:`optdesign.solve.driver.solve`). ``progress``: called once per phase count."""
+    from .solve.driver import solve as _solve
+
+    return _solve(load_problem(problem), progress=progress)
+
+
+def pareto(problem, out=None, points: int | None = None, workers: int | None = 1,
+           resume: bool = False, scheduler=None, progress: bool = False):
+    """The front of ripple against ratio (:func:`optdesign.pareto.sweep.sweep`).
+
+    ``out``: folder for the journal and pareto.csv/json (what ``--resume`` continues); by
+    default a temporary folder, removed afterwards (the result is in memory). ``workers``: 1
+    (default) solves in this process, None every core."""
+    from .pareto.sweep import sweep
+
+    problem = load_problem(problem)
+    if out is not None:
+        return sweep(problem, out, points=points, workers=workers, resume=resume,
+                     scheduler=scheduler, progress=progress)
+    with tempfile.TemporaryDirectory(prefix="optdesign-pareto-") as tmp:
+        return sweep(problem, tmp, points=points, workers=workers, scheduler=scheduler,
+                     progress=progress)
+
+
+def plot_speeds(problem, design: Mapping | None = None, eccentricity: float = 1.0, ax=None,
+                title: str | None = None):
+    """Each rocker's driving speed and the output envelope over one crank turn, of the
+    problem's own design or of ``design``; returns the matplotlib figure."""
+    from .design import Design
+    from .plots import plot_speeds as _plot
+
+    problem = load_problem(problem)
+    return _plot(Design.from_problem(problem, design), problem.stroke, problem.input_speed,
+                 eccentricity, ax=ax, title=title)
+
+
+def plot_mechanism(problem, design: Mapping | None = None, angles_deg=(0, 90, 180, 270),
+                   eccentricity: float = 1.0, title: str | None = None):
+    """The linkage drawn to scale at a few crank angles; returns the matplotlib figure."""
+    from .design import Design
+    from .plots import plot_mechanism as _plot
+
+    problem = load_problem(problem)
+    return _plot(Design.from_problem(problem, design), angles_deg, eccentricity, title=title)
+
+
+def plot_front(front, ax=None, title: str | None = None):
+    """δ against ratio of a :class:`~optdesign.pareto.front.ParetoResult`: every phase
+    count's front, the overall non-dominated designs and the knee; returns the figure."""
+    from .pareto.report import plot_fronts
+
+    points = front.points.copy()
+    points.attrs["knee"] = front.indicators.get("knee")
+    return plot_fronts(points, ax=ax, title=title)

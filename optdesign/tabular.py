@@ -1,0 +1,20 @@
+"""Results that show themselves in a notebook: ``to_frame()`` and an HTML table."""
+from __future__ import annotations
+
+import html
+
+
+class Tabular:
+    """Mixin of the result classes: ``to_frame()`` (a pandas DataFrame), a one-line
+    ``summary()``, and ``_repr_html_`` (Jupyter shows the summary above the frame)."""
+
+    def to_frame(self):                                    # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def summary(self) -> str:                              # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _repr_html_(self) -> str:
+        table = self.to_frame().to_html(float_format=lambda v: f"{v:.6g}", na_rep="–",
+                                        index=False, border=0)
+        return f"<p><b>{html.escape(self.summary())}</b></p>\n{table}"

@@ -139,7 +139,7 @@ class PhaseSolver:
             if "transmission_angle" in ver.violations:
                 tightening += ver.violations["transmission_angle"] + ANGLE_SAFETY_DEG
                 continue
-            if ver.sequences != given or run.at_window:
+            if not _same_cycles(ver.sequences, given) or run.at_window:
                 continue        # hand-overs changed order, or an angle ran to its window
             break
         record = StartRecord(start=start, ipopt_status=status, iterations=iterations,
@@ -328,6 +328,16 @@ def _no_optimum(result: PhaseResult) -> PhaseResult:
                       f"{', '.join(sorted(statuses))})"
                       + (f"; binding: {result.binding}" if result.binding else ""))
     return result
+
+
+def _same_cycles(a, b) -> bool:
+    """The hand-over sequences of every eccentricity are the same cycles: equal up to where
+    the turn starts (a hand-over that moved across φ = 0 changes the first curve of the
+    list, not the NLP's structure)."""
+    def rotations(seq):
+        return {tuple(seq[i:]) + tuple(seq[:i]) for i in range(len(seq))} or {()}
+
+    return len(a) == len(b) and all(tuple(x) in rotations(y) for x, y in zip(a, b))
 
 
 def _close(problem, a: dict, b: dict, share: float = 1e-3) -> bool:

@@ -421,7 +421,11 @@ class PhaseNLP:
         sl = L.find(L.x, "lengths")
         lbx[sl] = [P.design[k].lower / s for k, s in zip(self.free, self.scale)]
         ubx[sl] = [P.design[k].upper / s for k, s in zip(self.free, self.scale)]
-        half_window = math.pi / self.n_curves
+        # Each tracked angle may move 3 curve spacings' worth (at most 60°): far enough that
+        # a polish from a distant seed rarely runs into a window edge (each edge costs a
+        # re-solve), near enough that a peak's point cannot reach the same curve's minimum
+        # (about half a turn away), nor a hand-over the pair's other crossing.
+        half_window = min(3 * math.pi / self.n_curves, math.pi / 3)
         for e, seq in zip(self.eccs, sequences):
             tag = tag_of(e)
             sl = L.find(L.x, f"phi_peak_{tag}")

@@ -24,6 +24,9 @@ class Design:
     mechanism: str
     values: Mapping[str, float]
     options: Mapping[str, str] = field(default_factory=dict)
+    #: the parameter vector per eccentricity as a CasADi DM: single-angle calls (the exact
+    #: evaluator's root searches, thousands per design) cost half as much with it
+    _dm: dict = field(default_factory=dict, init=False, compare=False, repr=False)
 
     @classmethod
     def from_problem(cls, problem, values: Mapping[str, float] | None = None) -> "Design":
@@ -58,6 +61,13 @@ class Design:
         return Design(self.mechanism, {k: v * factor if k in lengths else v
                                        for k, v in self.values.items()}, self.options)
 
+    def p_dm(self, eccentricity: float = 1.0):
+        """:meth:`p` as a CasADi DM, made once per eccentricity."""
+        if eccentricity not in self._dm:
+            import casadi as ca
+            self._dm[eccentricity] = ca.DM(self.p(eccentricity))
+        return self._dm[eccentricity]
+
     def breakpoints(self, eccentricity: float = 1.0) -> tuple[float, ...]:
         values = dict(zip(self.model.lengths, self.p(eccentricity))) | {
             self.model.count_variable: self.count}
@@ -81,13 +91,14 @@ class Design:
     def at(self, phi: float, eccentricity: float = 1.0) -> dict[str, np.ndarray]:
         """The same at one crank angle (vectors over chains)."""
         out = np.array(self.model.packed(self.count, self.option_key)(
-            float(phi), self.p(eccentricity))).ravel()
+            float(phi), self.p_dm(eccentricity))).ravel()
         return dict(zip(("theta", "dtheta", "ddtheta", "cos_mu"), out.reshape(4, -1)))
 
     def chain_at(self, phi: float, k: int, eccentricity: float = 1.0) -> tuple[float, ...]:
         """θ_k, dθ_k/dφ, d²θ_k/dφ², cos μ_k and d cos μ_k/dφ of chain k alone at one crank
         angle (the other chains are not evaluated)."""
-        out = self.model.chain(self.count, self.option_key, k)(float(phi), self.p(eccentricity))
+        out = self.model.chain(self.count, self.option_key, k).call(
+            [float(phi), self.p_dm(eccentricity)])
         return tuple(float(v) for v in out)
 
     def cos_peaks(self, phi: np.ndarray, eccentricity: float = 1.0,

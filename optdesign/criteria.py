@@ -67,6 +67,11 @@ class Constraint:
     def tolerance(self, m: Measured) -> float:
         return TOL_RATIO
 
+    def bound_per_unit(self, problem, lower: bool) -> tuple[float, str]:
+        """How the NLP row's bound moves per unit of the designer's bound, and that unit:
+        IPOPT's multiplier of a row times this is d objective / d (the file's value)."""
+        return 1.0, self.unit or "-"
+
     def violation(self, problem, m: Measured) -> float:
         """How far the exact value lies outside the bounds (<= 0 when met)."""
         lower, upper = self.bounds(problem)
@@ -95,6 +100,11 @@ class TransmissionAngle(Constraint):
 
     def violation(self, problem, m):
         return problem.constraints.min_transmission_angle_deg - m.min_angle_deg
+
+    def bound_per_unit(self, problem, lower):
+        """The row's bound is cos²μ_min: d cos²μ_min / dμ_min = -sin 2μ_min per radian."""
+        mu = math.radians(problem.constraints.min_transmission_angle_deg)
+        return -math.sin(2 * mu) * math.pi / 180.0, "deg"
 
     def tolerance(self, m):
         return TOL_ANGLE_DEG

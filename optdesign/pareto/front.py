@@ -13,7 +13,8 @@ from .indicators import indicators, non_dominated, objectives
 #: mechanism's own design keys replace l0 .. l3 for other mechanisms
 LEAD = ["phases", "delta", "ratio"]
 TAIL = ["status", "min_transmission_angle_deg", "pin_radius", "ratio_multiplier", "epsilon",
-        "kind", "count_front", "non_dominated", "ipopt_status", "iterations", "time_s"]
+        "kind", "count_front", "non_dominated", "binding", "ipopt_status", "iterations",
+        "time_s"]
 
 
 def frame(records: list[dict], lengths: list[str]):

@@ -101,7 +101,8 @@ def knee(z: np.ndarray) -> int:
 
 
 def indicators(delta, ratio, ideal=None, nadir=None) -> dict:
-    """Hypervolume, spacing and knee of the non-dominated subset of (δ, ratio) points."""
+    """Hypervolume, spacing and knee of the non-dominated subset of (δ, ratio) points; a
+    front of one design has neither hypervolume nor spacing (None), not the ideal's value."""
     f = objectives(delta, ratio)
     mask = non_dominated(f) if len(f) else np.zeros(0, bool)
     front = f[mask]
@@ -109,9 +110,10 @@ def indicators(delta, ratio, ideal=None, nadir=None) -> dict:
         return {"n_points": 0, "hypervolume": 0.0, "spacing": float("nan"), "knee": None}
     z, ideal, nadir = normalise(front, ideal, nadir)
     k = knee(z)
+    single = len(front) == 1        # no trade-off: the normalisation has nothing to span
     return {"n_points": int(len(front)),
-            "hypervolume": hypervolume_2d(z),
-            "spacing": spacing(z),
+            "hypervolume": None if single else hypervolume_2d(z),
+            "spacing": None if single else spacing(z),
             "knee": int(np.flatnonzero(mask)[k]),
             "reference_point_normalised": list(REFERENCE),
             "ideal": {"delta": float(ideal[0]), "ratio": float(-ideal[1])},

@@ -100,6 +100,19 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
                      _nadir(v)])
     out.append(("table", ["front", "non-dominated points", "hypervolume", "spacing",
                           "ideal / nadir (δ, ratio)"], rows))
+    if ind["n_points"] == 1:
+        out.append(("p", "One design only: no trade-off between δ and the ratio in these "
+                         "bounds, and no hypervolume to report."))
+    limits = [(e["phases"], e["ratio"], e.get("ratio_limited_by", "")) for e in result.ends
+              if e.get("kind") == "largest_ratio" and e.get("status") == "optimal"]
+    if limits:
+        out.append(("h2", "What limits the ratio"))
+        out.append(("p", "At each phase count's largest-ratio end, the constraints and bounds "
+                         "that bind (IPOPT's active set): relaxing one of them is what would "
+                         "reach a larger ratio."))
+        out.append(("table", ["n", "largest ratio", "limited by"],
+                    [[n, _fmt(r, 5), by or "nothing active (an interior maximum)"]
+                     for n, r, by in limits]))
     knee = result.knee
     if knee is not None:
         out.append(("h2", "The knee design (best compromise)"))
@@ -117,9 +130,9 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
     out.append(("h2", "Non-dominated designs (over every phase count)"))
     cols = ["phases", "delta", "ratio"] + lengths + ["min_transmission_angle_deg",
                                                        "pin_radius", "ratio_multiplier",
-                                                       "status"]
+                                                       "binding", "status"]
     head = ["n", "δ", "ratio"] + [f"{k} [mm]" for k in lengths] + [
-        "μ_min [°]", "pin radius [mm]", "dδ/d ratio", "status"]
+        "μ_min [°]", "pin radius [mm]", "dδ/d ratio", "binding", "status"]
     rows = [[_fmt(r[c], 5 if c in ("delta", "ratio") else 3) if c != "phases" else
              int(r[c]) for c in cols] for _, r in result.front.iterrows()]
     out.append(("table", head, rows))
@@ -191,10 +204,11 @@ def summary_text(result) -> str:
              f" verified feasible; {ind['n_points']} non-dominated over every phase count"]
     for n, v in result.per_count.items():
         lines.append(f"  n = {n}: {v['n_points']} non-dominated, hypervolume "
-                     f"{v['hypervolume']:.4f}, spacing {_fmt(v['spacing'])}"
-                     + (" (one design: no trade-off, the normalisation is degenerate)"
-                        if v["n_points"] == 1 else ""))
-    if ind["n_points"]:
+                     f"{_fmt(v['hypervolume'])}, spacing {_fmt(v['spacing'])}"
+                     + (" (one design: no trade-off)" if v["n_points"] == 1 else ""))
+    if ind["n_points"] == 1:
+        lines.append("one design over every phase count: no trade-off, no hypervolume")
+    elif ind["n_points"]:
         lines.append(f"hypervolume {ind['hypervolume']:.4f} (normalised: ideal (0, 0), nadir "
                      f"(1, 1), reference {REFERENCE}); spacing {_fmt(ind['spacing'])}")
     knee = result.knee

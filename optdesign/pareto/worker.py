@@ -60,8 +60,11 @@ class _Point:
     t0: float = field(default_factory=time.perf_counter)
 
     def record(self, status: str, values: dict | None = None, figures=None,
-               multiplier: float | None = None, ipopt_status: str = "", note: str = "") -> dict:
-        """The journal's record; ``figures`` has ``delta``, ``ratio``, ``min_angle_deg``."""
+               multiplier: float | None = None, ipopt_status: str = "", note: str = "",
+               active: list | None = None, limited_by: list | None = None) -> dict:
+        """The journal's record; ``figures`` has ``delta``, ``ratio``, ``min_angle_deg``;
+        ``active``: what binds at the point (the solve's active set); ``limited_by``: at the
+        largest-ratio end, what stops the ratio from growing further."""
         problem, feasible = self.problem, status == "optimal"
         design = {k: float(values[k]) for k in problem.model.lengths} if values else {}
         if design:
@@ -75,7 +78,10 @@ class _Point:
                 "ratio": figures.ratio if exact else None,
                 "min_transmission_angle_deg": figures.min_angle_deg if exact else None,
                 **{k: (v if feasible else None) for k, v in columns.items()},
-                "ratio_multiplier": multiplier, "ipopt_status": ipopt_status,
+                "ratio_multiplier": multiplier,
+                "binding": "; ".join(a["name"] for a in active or []),
+                "ratio_limited_by": "; ".join(a["name"] for a in limited_by or []),
+                "ipopt_status": ipopt_status,
                 "iterations": self.iterations, "tries": self.tries,
                 "time_s": time.perf_counter() - self.t0, "note": note}
 
@@ -95,13 +101,14 @@ def solve_end(problem, count: int, kind: str) -> dict:
             return point.record(res.status, note=res.message)
         slack = res.ratio - problem.objective.min_ratio > 1e-6
         return point.record("optimal", res.design, _Ver.of(res), 0.0 if slack else None,
-                            "Solve_Succeeded")
+                            "Solve_Succeeded", active=res.active)
     q = replace(problem, objective=replace(problem.objective, minimize="-ratio",
                                            max_ripple=LOOSE_MAX_RIPPLE))
     res = solve_phase(q, count, solver=_solver(q, count))
     point.iterations, point.tries = res.iterations, len(res.starts)
     if res.status != "optimal":
         return point.record(res.status, note=res.message)
+    limits = [a for a in res.active if a["name"] != "max_ripple"]   # the cap is loose
     ratio = res.ratio * (1 - END_RATIO_BACKOFF)
     outcome = _solver(problem, count).solve_from(dict(res.design), min_ratio=ratio)
     rec, ver = outcome.record, outcome.verification
@@ -110,8 +117,9 @@ def solve_end(problem, count: int, kind: str) -> dict:
         point.tries, point.epsilon = point.tries + 1, ratio
         return point.record("optimal", outcome.values, ver,
                             rec.ratio_multiplier if rec.ipopt_status == "Solve_Succeeded"
-                            else None, rec.ipopt_status)
-    return point.record("optimal", res.design, _Ver.of(res), None, "Solve_Succeeded")
+                            else None, rec.ipopt_status, active=rec.active, limited_by=limits)
+    return point.record("optimal", res.design, _Ver.of(res), None, "Solve_Succeeded",
+                        active=res.active, limited_by=limits)
 
 
 def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
@@ -141,7 +149,7 @@ def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
         if last.feasible:
             mult = last.ratio_multiplier if last.ipopt_status == "Solve_Succeeded" else None
             return point.record("optimal", outcome.values, outcome.verification, mult,
-                                last.ipopt_status)
+                                last.ipopt_status, active=last.active)
         if point.tries >= 2 + max(1, problem.solver.starts):
             break
     # as in solve.driver: infeasible only on IPOPT's word, not for running out of iterations

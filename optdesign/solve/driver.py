@@ -18,7 +18,7 @@ import numpy as np
 from ..criteria import objective_of
 from ..mechanisms import STROKE_SIGNS
 from .accuracy import solve_accuracy
-from .nlp import PhaseNLP
+from .nlp import SECONDARY_BUDGET, PhaseNLP
 from .result import PhaseResult, SolveResult, StartRecord
 from .screening import line_seeds, screen
 from .verify import Verification, start_guess, verify
@@ -26,6 +26,10 @@ from .verify import Verification, start_guess, verify
 SUCCESS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 #: the status of a run stopped because it entered a known optimum's neighbourhood
 JOINED = "Joined_Known_Basin"
+#: the status of a run stopped while still far from feasible (nlp.STALL_AFTER iterations)
+STALLED = "Stalled_Infeasible"
+#: the status of a secondary basin's polish stopped at its budget (nlp.SECONDARY_BUDGET)
+EXHAUSTED = "Secondary_Budget_Exhausted"
 MAX_REFINEMENTS = 4
 ANGLE_SAFETY_DEG = 0.01
 #: two polished optima are one basin when their designs differ by less than this (relative
@@ -98,8 +102,12 @@ class PhaseSolver:
             return verify(problem, values)
 
     def solve_from(self, values: dict, min_ratio=None, max_ripple=None,
-                   ver: Verification | None = None) -> Outcome:
-        """IPOPT from one start; refined until the exact check agrees with the NLP's structure."""
+                   ver: Verification | None = None, secondary: bool = False) -> Outcome:
+        """IPOPT from one start; refined until the exact check agrees with the NLP's structure.
+
+        A quasi-Newton run that stalls (or runs out of iterations) is retried once with the
+        exact Hessian, unless the start is ``secondary`` (a further basin polished beside the
+        best one: a stalled run there is abandoned, not rescued)."""
         problem = self.problem
         if min_ratio is not None or max_ripple is not None:
             obj = replace(problem.objective,
@@ -112,22 +120,32 @@ class PhaseSolver:
         # The NLP holds the worst transmission angle at exact points: no margin to start with;
         # a dip the exact check still finds tightens the bound by the deficit.
         iterations, status, surrogate, multiplier, note = 0, "not run", None, None, ""
+        active: list = []
         tightening, hessian = 0.0, problem.solver.hessian
         for _ in range(MAX_REFINEMENTS):
             if not ver.sequences:
                 note = ver.message
                 break
-            run = self._ipopt(problem, ver, tightening, hessian)
-            status, surrogate, multiplier = run.status, run.surrogate, run.multiplier
+            run = self._ipopt(problem, ver, tightening, hessian,
+                              SECONDARY_BUDGET - iterations if secondary else None)
+            status, surrogate, multiplier, active = (run.status, run.surrogate,
+                                                     run.multiplier, run.active)
             iterations += run.iterations
             trial = values | run.lengths
             new = self.verify(problem, trial)
-            if status == "Maximum_Iterations_Exceeded" and hessian == "limited-memory":
+            if status == "Maximum_Iterations_Exceeded" and hessian == "limited-memory" \
+                    and not secondary:
                 # The quasi-Newton run stalled: once more from the same start with CasADi's
                 # exact Hessian, which converges, or certifies local infeasibility, where
                 # L-BFGS wanders.
                 hessian = "exact"
                 continue
+            if status == STALLED:
+                note = f"still infeasible after {run.iterations} iterations"
+                break
+            if status == EXHAUSTED:
+                note = f"a secondary basin not converged in {SECONDARY_BUDGET} iterations"
+                break
             if status == JOINED:
                 note = "joined the basin of an optimum found from another start"
                 break
@@ -145,11 +163,14 @@ class PhaseSolver:
         record = StartRecord(start=start, ipopt_status=status, iterations=iterations,
                              time_s=time.perf_counter() - t0,
                              feasible=bool(ver.feasible and status in SUCCESS),
-                             delta=ver.delta, note=note, ratio_multiplier=multiplier)
+                             delta=ver.delta, note=note, ratio_multiplier=multiplier,
+                             active=active if status in SUCCESS else [])
         return Outcome(record, ver, values, surrogate)
 
-    def _ipopt(self, problem, ver: Verification, tightening: float, hessian: str) -> "_Run":
-        """One IPOPT run on the NLP from the verified design ``ver``."""
+    def _ipopt(self, problem, ver: Verification, tightening: float, hessian: str,
+               budget: int | None = None) -> "_Run":
+        """One IPOPT run on the NLP from the verified design ``ver`` (stopped after ``budget``
+        iterations when one is given)."""
         nlp = self.nlp(ver.sequences)
         guess = start_guess(nlp, ver)
         lbx, ubx = nlp.bounds(guess, ver.sequences)
@@ -157,20 +178,23 @@ class PhaseSolver:
         lbg, ubg = nlp.constraint_bounds(problem, ver.sequences, tightening)
         with self.timings.stage("build"):
             solver = nlp.solver(hessian)
-        nlp.watch.known = [np.array([v[k] for k in nlp.free]) / nlp.scale for v in self.avoid]
-        nlp.watch.joined = False
+        nlp.watch.start([np.array([v[k] for k in nlp.free]) / nlp.scale for v in self.avoid],
+                        lbg, ubg, None if budget is None else max(budget, 1))
         with self.timings.stage("ipopt"):
             sol = solver(x0=nlp.start(guess, lbx, ubx, params), lbx=lbx, ubx=ubx, lbg=lbg,
                          ubg=ubg, p=params)
         stats = solver.stats()
         x = np.array(sol["x"]).ravel()
         joined = nlp.watch.joined
-        return _Run(status=JOINED if joined else stats["return_status"],
+        status = JOINED if joined else STALLED if nlp.watch.stalled else \
+            EXHAUSTED if nlp.watch.exhausted else stats["return_status"]
+        return _Run(status=status,
                     iterations=int(stats["iter_count"]),
                     lengths=nlp.lengths_of(x), surrogate=nlp.worst_ripple(x, params),
                     multiplier=nlp.multiplier(sol["lam_g"], "min_ratio"),
                     at_window=nlp.at_window_bound(x, lbx, ubx),
-                    binding="" if joined else nlp.binding(np.array(sol["g"]).ravel(), lbg, ubg))
+                    binding="" if joined else nlp.binding(np.array(sol["g"]).ravel(), lbg, ubg),
+                    active=nlp.active_set(problem, x, sol["lam_x"], sol["lam_g"], lbx, ubx))
 
 
 @dataclass
@@ -184,6 +208,7 @@ class _Run:
     multiplier: float
     at_window: bool
     binding: str
+    active: list            # what binds at the solution, with d objective / d bound
 
 
 class _Polishing:
@@ -200,7 +225,7 @@ class _Polishing:
     def polish(self, values: dict) -> Outcome:
         self.solver.avoid = [o.values for o in self.optima]
         try:
-            outcome = self.solver.solve_from(dict(values))
+            outcome = self.solver.solve_from(dict(values), secondary=self.best is not None)
         finally:
             self.solver.avoid = []
         return self.record(outcome)
@@ -261,18 +286,24 @@ class _Polishing:
 
 def _in_parallel(problem, count: int, starts: list[dict]) -> list[tuple[Outcome, Timings]]:
     """Polish each start in a process of its own (forked: nothing to import again; each
-    builds its NLP, a fraction of a second); the outcomes and each process's stage times."""
+    builds its NLP, a fraction of a second; each ends if this process dies); the outcomes
+    and each process's stage times."""
     import multiprocessing as mp
+    import os
     from concurrent.futures import ProcessPoolExecutor
 
-    with ProcessPoolExecutor(len(starts), mp_context=mp.get_context("fork")) as pool:
-        return list(pool.map(_polish_alone, [(problem, count, v) for v in starts]))
+    from ..lifetime import die_with_parent
+
+    with ProcessPoolExecutor(len(starts), mp_context=mp.get_context("fork"),
+                             initializer=die_with_parent, initargs=(os.getpid(),)) as pool:
+        return list(pool.map(_polish_alone, [(problem, count, v, i > 0)
+                                             for i, v in enumerate(starts)]))
 
 
 def _polish_alone(job) -> tuple[Outcome, Timings]:
-    problem, count, values = job
+    problem, count, values, secondary = job
     solver = PhaseSolver(problem, count)
-    return solver.solve_from(dict(values)), solver.timings
+    return solver.solve_from(dict(values), secondary=secondary), solver.timings
 
 
 def workers_for(problem) -> int:
@@ -320,7 +351,9 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
 
 def _no_optimum(result: PhaseResult) -> PhaseResult:
     """Infeasible only on IPOPT's word; polishes that ran out of iterations prove nothing."""
-    notes = [r.note for r in result.starts if r.note]
+    verdicts = [r.note for r in result.starts
+                if r.note and r.ipopt_status == "Infeasible_Problem_Detected"]
+    notes = verdicts or [r.note for r in result.starts if r.note]
     statuses = {r.ipopt_status for r in result.starts}
     result.status = "infeasible" if "Infeasible_Problem_Detected" in statuses else "failed"
     result.binding = max(set(notes), key=notes.count) if notes else None
@@ -377,6 +410,7 @@ def _fill(result: PhaseResult, problem, outcome: Outcome) -> PhaseResult:
     result.surrogate_delta = outcome.surrogate
     result.surrogate_gap = None if outcome.surrogate is None else outcome.surrogate - ver.delta
     result.regulation = ver.regulation()
+    result.active = outcome.record.active
     result.message = ""
     return result
 
@@ -416,6 +450,6 @@ def solve(problem, progress=None) -> SolveResult:
                    "min_ratio": problem.objective.min_ratio,
                    "max_ripple": problem.objective.max_ripple,
                    "eccentricities": list(problem.eccentricities)},
-        accuracy=accuracy,
+        accuracy=accuracy, active=best.active if best else [],
         message=message, stroke=problem.stroke, mechanism=problem.mechanism,
         input_speed=problem.input_speed, timings_s=timings.to_dict())

@@ -97,17 +97,44 @@ class Quantities:
     cos_mu_sq: dict                 # eccentricity tag -> cos²μ of every chain at its extremes
 
 
+#: a secondary basin's run still this infeasible (largest constraint violation, the rows' own
+#: units) after STALL_AFTER iterations is stopped as stalled: a quasi-Newton run that is this
+#: far off by then wanders through restoration phases to the iteration limit (disc problem,
+#: n = 4: 100 iterations, then 13 more with the exact Hessian to join the best basin)
+STALL_AFTER = 30
+STALL_INFEASIBILITY = 1e-2
+#: iterations a secondary basin's polish may take (the best-ranked basin has IPOPT's own
+#: limit): one that has not converged by then creeps along a slow valley of a worse basin
+#: (disc problem, n = 12: 100 L-BFGS iterations to end 1 % above the best optimum)
+SECONDARY_BUDGET = 50
+
+
 class _Watch(ca.Callback):
-    """IPOPT's iteration callback: stops the run once its free lengths (scaled) lie within
-    ``radius`` of one of ``known``, optima already found from other starts. The run has
-    joined a known basin; following it to the end would find that optimum again."""
+    """IPOPT's iteration callback. It stops the run
+
+    * once its free lengths (scaled) lie within ``radius`` of one of ``known``, optima
+      already found from other starts: the run has joined a known basin, and following it to
+      the end would find that optimum again (``joined``);
+    * with a ``budget`` (a secondary basin's polish): after :data:`STALL_AFTER` iterations
+      still violating a constraint row by more than :data:`STALL_INFEASIBILITY`
+      (``stalled``), and after ``budget`` iterations (``exhausted``). The best-ranked
+      basin's polish runs to IPOPT's own limit.
+    """
 
     def __init__(self, n_x: int, n_g: int, lengths: slice, radius: float = 2e-2):
         ca.Callback.__init__(self)
         self.n_x, self.n_g, self.lengths, self.radius = n_x, n_g, lengths, radius
         self.known: list[np.ndarray] = []
-        self.joined = False
+        self.lbg, self.ubg = np.zeros(n_g), np.zeros(n_g)
+        self.joined = self.stalled = self.exhausted = False
+        self.calls, self.budget = 0, None
         self.construct("watch", {})
+
+    def start(self, known, lbg, ubg, budget: int | None = None) -> None:
+        """Arm the watch for one run."""
+        self.known, self.lbg, self.ubg = known, np.asarray(lbg), np.asarray(ubg)
+        self.joined = self.stalled = self.exhausted = False
+        self.calls, self.budget = 0, budget
 
     def get_n_in(self):
         return ca.nlpsol_n_out()
@@ -132,11 +159,22 @@ class _Watch(ca.Callback):
         return ca.Sparsity(0, 0)
 
     def eval(self, arg):
+        self.calls += 1
         if self.known:
             x = np.array(arg[0]).ravel()[self.lengths]
             if any(np.max(np.abs(x - k)) <= self.radius for k in self.known):
                 self.joined = True
                 return [1]
+        if self.budget is not None and self.calls == STALL_AFTER:
+            g = np.array(arg[2]).ravel()        # nlpsol_out order: x, f, g, lam_x, lam_g
+            with np.errstate(invalid="ignore"):
+                viol = np.nan_to_num(np.maximum(self.lbg - g, g - self.ubg), nan=np.inf)
+            if viol.size and viol.max() > STALL_INFEASIBILITY:
+                self.stalled = True
+                return [1]
+        if self.budget is not None and self.calls > self.budget:
+            self.exhausted = True
+            return [1]
         return [0]
 
 
@@ -503,6 +541,31 @@ class PhaseNLP:
         if viol.size == 0 or viol.max() <= 1e-6:
             return ""
         return self.layout.name_of(self.layout.g, int(np.argmax(viol)))
+
+    def active_set(self, problem, x, lam_x, lam_g, lbx, ubx, tol: float = 1e-7) -> list[dict]:
+        """What binds at IPOPT's solution, with its sensitivity: each free length on a bound
+        and each criterion whose rows carry a multiplier, as ``{name, kind, side,
+        sensitivity, unit}``; ``sensitivity`` is d objective / d bound in the objective's
+        units per ``unit`` of the designer's bound (IPOPT's multipliers, CasADi's sign
+        convention: d f*/d bound = -λ; a criterion's rows share one bound, so they add up)."""
+        lam_x, lam_g = np.asarray(lam_x).ravel(), np.asarray(lam_g).ravel()
+        out = []
+        sl = self.layout.find(self.layout.x, "lengths")
+        for i, (k, s) in enumerate(zip(self.free, self.scale)):
+            lam = lam_x[sl][i]
+            if abs(lam) > tol:
+                side = "lower" if lam < 0 else "upper"
+                out.append({"name": f"{k} {side} bound", "kind": "bound", "side": side,
+                            "sensitivity": float(-lam / s), "unit": "mm"})
+        for name, criterion in self._criterion_blocks:
+            lam = lam_g[self.layout.find(self.layout.g, name)]
+            if np.max(np.abs(lam), initial=0.0) <= tol:
+                continue
+            side = "lower" if lam[np.argmax(np.abs(lam))] < 0 else "upper"
+            per, unit = criterion.bound_per_unit(problem, side == "lower")
+            out.append({"name": name, "kind": "constraint", "side": side,
+                        "sensitivity": float(-lam.sum() * per), "unit": unit})
+        return sorted(out, key=lambda a: -abs(a["sensitivity"]))
 
     def multiplier(self, lam_g, name: str) -> float:
         """d f*/d lower bound of block ``name`` (= -λ in CasADi's sign convention)."""

@@ -14,6 +14,7 @@ def summary_text(result, problem) -> str:
                      f"{', '.join(f'{e:g}' for e in problem.eccentricities)}) = "
                      f"{result.delta:.6f}; ratio = {result.ratio:.6f}; least transmission "
                      f"angle = {result.min_transmission_angle_deg:.2f} deg")
+        lines.append(binding_text(result.active, problem))
     else:
         lines.append(result.message)
     lines.append(f"solve time {result.solve_time_s:.2f} s, {result.iterations} IPOPT iterations")
@@ -27,3 +28,13 @@ def summary_text(result, problem) -> str:
             lines.append(f"  n = {p.phases}: {p.status}: {p.message}")
     lines.append("every figure above is the exact evaluator's, not the NLP surrogate's")
     return "\n".join(lines)
+
+
+def binding_text(active: list[dict], problem) -> str:
+    """One line: what binds at the optimum and what relaxing it by one unit buys."""
+    if not active:
+        return "binding: nothing (an interior optimum: no bound or constraint is active)"
+    what = "δ" if problem.objective.minimize == "ripple" else "(-ratio)"
+    return "binding: " + "; ".join(
+        f"{a['name']} (d{what}/d bound = {a['sensitivity']:+.3g}"
+        f"{'' if a['unit'] == '-' else ' per ' + a['unit']})" for a in active)

@@ -21,6 +21,9 @@ class StartRecord:
     #: IPOPT's multiplier of that constraint (the Pareto front's local slope dδ/d ratio);
     #: 0 when the bound is slack.
     ratio_multiplier: float | None = None
+    #: what binds where IPOPT ended (NLP.active_set): name, kind (bound or constraint), side,
+    #: sensitivity d objective / d bound per unit, unit
+    active: list[dict] = field(default_factory=list)
 
 
 @dataclass
@@ -44,6 +47,8 @@ class PhaseResult:
     #: basins polished, distinct optima among them
     screening: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)            # seconds per stage
+    #: the active bounds and binding constraints at the optimum, with their sensitivities
+    active: list[dict] = field(default_factory=list)
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -72,6 +77,8 @@ class SolveResult(Tabular):
     #: wall time per stage, seconds: build (the NLPs), screening, ipopt, verification (the
     #: exact checks and the accuracy report); what is left of solve_time_s is bookkeeping
     timings_s: dict = field(default_factory=dict)
+    #: the active bounds and binding constraints of the best design (see PhaseResult.active)
+    active: list[dict] = field(default_factory=list)
 
     def best_phase(self) -> PhaseResult | None:
         if self.design is None:

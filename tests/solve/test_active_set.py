@@ -1,0 +1,53 @@
+"""The active set a solve reports: what binds, and d δ / d bound from IPOPT's multipliers,
+checked against re-solves with the bound moved (finite differences of verified optima)."""
+from dataclasses import replace
+
+import pytest
+
+from optdesign.problem import load_problem
+from optdesign.solve.driver import solve_phase
+from tests.conftest import ROOT
+
+
+@pytest.fixture(scope="module")
+def disc():
+    problem = load_problem(ROOT / "problems" / "sharkov2022_disc.yaml")
+    return problem, solve_phase(problem, 6, workers=1)
+
+
+def _delta(problem, **changes):
+    c = replace(problem.constraints, **changes)
+    return solve_phase(replace(problem, constraints=c), 6, workers=1).delta
+
+
+def test_the_disc_optimum_names_what_binds(disc):
+    problem, result = disc
+    names = {a["name"] for a in result.active}
+    assert {"transmission_angle[e1]", "pin_radius", "l2 upper bound"} <= names
+    angle = next(a for a in result.active if a["name"] == "transmission_angle[e1]")
+    assert angle["unit"] == "deg" and angle["kind"] == "constraint"
+
+
+@pytest.mark.parametrize("name, key, step", [
+    ("transmission_angle[e1]", "min_transmission_angle_deg", 0.05),
+    ("pin_radius", "min_pin_radius", 0.5),
+])
+def test_sensitivities_match_re_solves(disc, name, key, step):
+    problem, result = disc
+    reported = next(a["sensitivity"] for a in result.active if a["name"] == name)
+    base = getattr(problem.constraints, key)
+    up, down = _delta(problem, **{key: base + step}), _delta(problem, **{key: base - step})
+    measured = (up - down) / (2 * step)
+    assert reported == pytest.approx(measured, rel=0.02)
+
+
+def test_a_length_bound_sensitivity_matches_a_re_solve(disc):
+    """Tightened, not widened: l0 sits 0.02 mm below its own upper bound, so one more mm of
+    l2 moves l0 onto that bound and the slope changes there (a one-sided derivative)."""
+    problem, result = disc
+    reported = next(a["sensitivity"] for a in result.active if a["name"] == "l2 upper bound")
+    step = -1.0
+    wider = replace(problem, design=problem.design | {
+        "l2": replace(problem.design["l2"], upper=problem.design["l2"].upper + step)})
+    measured = (solve_phase(wider, 6, workers=1).delta - result.delta) / step
+    assert reported == pytest.approx(measured, rel=0.05)

@@ -1,7 +1,9 @@
 """The ``optdesign`` command: parses arguments, calls the library, maps outcomes to exit codes.
 
 Exit codes (docs/contract.md): 0 success; 1 solved but infeasible or failed (the
-result is still written); 2 bad input or usage, one line on stderr naming file and key.
+result is still written), or the run could not finish (out of memory, a write that failed, an
+internal error); 2 bad input or usage, one line on stderr naming file and key. Every failure
+is one line on stderr; ``--debug`` adds the traceback.
 """
 from __future__ import annotations
 
@@ -10,7 +12,10 @@ import os
 import sys
 from importlib import import_module
 
-from .errors import OptDesignError, ProblemError
+from .errors import OptDesignError, ProblemError, UsageError, shown
+
+#: longest line the command writes on stderr
+MAX_MESSAGE_CHARS = 1000
 
 #: Each command is a module with ``add_parser(subparsers)`` and ``run(args) -> exit code``.
 COMMANDS = [
@@ -26,7 +31,7 @@ COMMANDS = [
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message):          # usage errors: one line, exit 2
-        self.exit(2, f"optdesign: {message}\n")
+        self.exit(2, one_line(f"optdesign: {message}") + "\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -34,6 +39,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser = _Parser(prog="optdesign", description="Size the linkages of pulse CVTs.")
     parser.add_argument("--version", action="version", version=f"optdesign {__version__}")
+    parser.add_argument("--debug", action="store_true",
+                        help="print the traceback of any failure (for a bug report)")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     for name in COMMANDS:
         import_module(name).add_parser(sub)
@@ -44,16 +51,67 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     os.environ.setdefault("MPLBACKEND", "Agg")      # the command writes figures to files only
     try:
-        return int(args.run(args))
-    except ProblemError as exc:
-        print(f"optdesign: {exc}", file=sys.stderr)
-        return 2
-    except OptDesignError as exc:
-        print(f"optdesign: {exc}", file=sys.stderr)
+        code = int(args.run(args))
+        sys.stdout.flush()              # a closed pipe shows here, not at exit
+        return code
+    except BrokenPipeError:             # `optdesign analyze P.yaml | head`: quietly
+        _silence_stdout()
         return 1
     except KeyboardInterrupt:
-        print("optdesign: interrupted", file=sys.stderr)
-        return 130
+        return _fail(args, "optdesign: interrupted", 130)
+    except (ProblemError, UsageError) as exc:
+        return _fail(args, f"optdesign: {exc}", 2)
+    except OptDesignError as exc:
+        return _fail(args, f"optdesign: {exc}", 1)
+    except MemoryError:
+        return _fail(args, f"optdesign {args.command}: out of memory", 1)
+    except RecursionError:
+        return _fail(args, _internal(args, "RecursionError", "nested too deep"), 1)
+    except OSError as exc:              # a disk full, a folder removed under a running command
+        name = exc.filename
+        name = os.fsdecode(name) if isinstance(name, (str, bytes, os.PathLike)) else name
+        where = f": {shown(name)}" if name is not None else ""
+        return _fail(args, f"optdesign {args.command}: {exc.strerror or type(exc).__name__}"
+                           f"{where}", 1)
+    except Exception as exc:            # a bug: say so, and how to report it
+        return _fail(args, _internal(args, type(exc).__name__, str(exc)), 1)
+
+
+def _internal(args, kind: str, detail: str) -> str:
+    return (f"optdesign {args.command}: internal error ({kind}: {shown(detail, 120)}); please "
+            f"report it with the problem file and the command line"
+            + ("" if args.debug else " (--debug prints the traceback)"))
+
+
+def _fail(args, message: str, code: int) -> int:
+    """Write ``message`` as one line on stderr (with the traceback before it under --debug)
+    and return ``code``."""
+    if getattr(args, "debug", False):
+        import traceback
+        traceback.print_exc()
+    try:
+        print(one_line(message), file=sys.stderr, flush=True)
+    except (OSError, ValueError):       # stderr closed too: the exit code still tells
+        pass
+    return code
+
+
+def one_line(message: str) -> str:
+    """``message`` as one printable line of at most MAX_MESSAGE_CHARS characters (a file
+    name may hold a newline, a value a megabyte)."""
+    text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in message)
+    return text if len(text) <= MAX_MESSAGE_CHARS else text[:MAX_MESSAGE_CHARS - 3] + "..."
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null, so the interpreter's last flush of what a closed pipe did
+    not take raises nothing."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):   # not a real file (tests capture it)
+        pass
 
 
 if __name__ == "__main__":

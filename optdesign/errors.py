@@ -9,6 +9,11 @@ class ProblemError(OptDesignError, ValueError):
     """A problem file (or a design given in code) is not valid; the CLI exits with code 2."""
 
 
+class UsageError(OptDesignError, ValueError):
+    """A command-line argument or an output folder that cannot work (exit 2), found before
+    any work is done: one line naming the option and what is wrong."""
+
+
 class AssemblyError(OptDesignError):
     """A design does not assemble: names the chain and the crank angle where it fails (exit 1)."""
 
@@ -21,3 +26,22 @@ class AssemblyError(OptDesignError):
 
 class SolveError(OptDesignError):
     """The optimiser could not produce a result at all (not raised for a mere failed solve)."""
+
+
+#: longest repr of a user's value that a message quotes
+SHOWN_CHARS = 60
+
+
+def shown(value, limit: int = SHOWN_CHARS) -> str:
+    """A bounded repr of ``value`` for a one-line message: a value read from a file may be a
+    megabyte of text or a list of lists a thousand deep, and the message must stay short."""
+    import reprlib
+
+    r = reprlib.Repr()
+    r.maxlevel, r.maxstring, r.maxother, r.maxlong = 3, limit, limit, limit
+    r.maxlist = r.maxtuple = r.maxdict = r.maxset = r.maxfrozenset = 6
+    try:
+        text = r.repr(value)
+    except (ValueError, RecursionError):   # an int past str()'s digit limit, a deep custom type
+        text = f"<{type(value).__name__}>"
+    return text if len(text) <= limit else text[:limit - 3] + "..."

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 import tempfile
 from pathlib import Path
@@ -36,7 +37,49 @@ def atomic_write_text(path: str | Path, text: str) -> Path:
 
 
 def atomic_write_json(path: str | Path, data) -> Path:
-    return atomic_write_text(path, json.dumps(data, indent=2, default=_jsonable) + "\n")
+    return atomic_write_text(path, json_text(data) + "\n")
+
+
+def json_text(data, indent: int | None = 2, reasons: bool = True) -> str:
+    """Strict JSON of ``data`` (no NaN, no Infinity: :func:`finite_json`), NumPy values
+    included; what every JSON file and ``--json`` print of the package is made of.
+    ``reasons=False`` leaves out the ``non_finite`` keys (records read back as table rows)."""
+    return json.dumps(finite_json(data, reasons), indent=indent, allow_nan=False,
+                      default=_jsonable)
+
+
+#: the key a JSON object gains when some of its numbers were not finite (docs/contract.md)
+NON_FINITE_KEY = "non_finite"
+
+
+def finite_json(value, reasons: bool = True):
+    """``value`` with every float that is not finite replaced by None (JSON null). A mapping
+    that held one gains ``non_finite``: {key: "inf" | "-inf" | "nan"}, so a reader can tell
+    an infinite ripple from a missing one. NumPy scalars and arrays become Python ones."""
+    value = _plain(value)
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        out, why = {}, {}
+        for k, v in value.items():
+            v = _plain(v)
+            if isinstance(v, float) and not math.isfinite(v):
+                why[str(k)] = "nan" if math.isnan(v) else ("inf" if v > 0 else "-inf")
+            out[k] = finite_json(v, reasons)
+        if why and reasons:
+            old = out.get(NON_FINITE_KEY)
+            out[NON_FINITE_KEY] = {**old, **why} if isinstance(old, dict) else why
+        return out
+    if isinstance(value, (list, tuple)):
+        return [finite_json(v, reasons) for v in value]
+    return value
+
+
+def _plain(value):
+    """A NumPy scalar or array as the Python value it holds; anything else unchanged."""
+    if type(value).__module__ == "numpy":
+        return _jsonable(value)
+    return value
 
 
 def atomic_savefig(fig, path: str | Path, **kwargs) -> Path:

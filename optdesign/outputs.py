@@ -10,6 +10,12 @@ from pathlib import Path
 
 from .io import atomic_savefig, atomic_write_bytes, atomic_write_json, atomic_write_text
 
+#: every file ``solve`` may leave in its folder (the set :mod:`optdesign.output_dir` replaces)
+SOLVE_FILES = ("result.json", "summary.txt", "speeds.png", "mechanism.png")
+#: every file ``pareto`` may leave in its folder (the set a fresh sweep clears)
+PARETO_FILES = ("points.jsonl", "pareto.csv", "pareto.json", "fronts.png",
+                "knee_mechanism.png", "knee_speeds.png", "report.md", "report.html")
+
 
 def save_figure(fig, path: Path, **kwargs) -> Path:
     """Save ``fig`` atomically to ``path`` and close it, whatever happens."""

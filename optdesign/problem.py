@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from .criteria import OBJECTIVES
-from .errors import ProblemError
+from .errors import ProblemError, shown
 from .mechanisms import get_mechanism
 
 #: Optional sections parsed by the module that owns them, imported only when present:
@@ -27,6 +27,25 @@ TOP_KEYS = {"name", "mechanism", "input_speed", "stroke", "design", "options", "
             "objective", "regulation", "solver"}
 RIPPLE_DEFINITIONS = ("midrange", "mean")
 HESSIANS = ("exact", "limited-memory")
+
+# Limits of the values a problem file may give (docs/contract.md, "Limits"); those of the
+# file itself (size, nesting, aliases) are in optdesign.problem_yaml.
+#: every number is finite and, unless zero, of a magnitude in this range: no denormal (whose
+#: few significant bits change δ) and no value whose square or cube overflows
+NUMBER_MAGNITUDE = (1e-100, 1e100)
+MAX_NAME_CHARS = 100            # ``name``: results go to results/NAME/
+MAX_TEXT_CHARS = 100            # any other text (choices such as ``stroke``)
+MAX_INTEGER = 1_000_000         # a count with no limit of its own
+MAX_COUNT = 64                  # phases, sections, freewheels
+MAX_ECCENTRICITIES = 16
+MIN_ECCENTRICITY = 1e-9         # below it the ratio (∝ e) is lost in rounding
+#: least (regulated length × eccentricity) / longest length: _check_regulated_scale
+MIN_REGULATED_FRACTION = 1e-9
+#: solver keys: (least, most)
+SOLVER_INTEGERS = {"samples": (16, 2000), "starts": (1, 1000), "agree": (1, 100),
+                   "seed": (0, 2**32 - 1), "max_iter": (1, 100_000), "screen": (1, 65_536),
+                   "basins": (1, 64), "workers": (0, 256)}
+SMOOTHING_MAX = 1e6
 
 
 @dataclass(frozen=True)
@@ -149,44 +168,28 @@ class Problem:
 
 
 # --------------------------------------------------------------------------- loading
-def _yaml_loader():
-    """PyYAML's safe loader, but reading ``1e7`` and ``2.5E-3`` as numbers as YAML 1.2 does
-    (YAML 1.1 wants ``1.0e+7``; a designer writing stiffness 1e7 means a number)."""
-    import re
-
-    import yaml
-
-    class Loader(yaml.SafeLoader):
-        pass
-
-    Loader.add_implicit_resolver(
-        "tag:yaml.org,2002:float",
-        re.compile(r"""^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"""),
-        list("-+0123456789"))
-    return Loader
-
-
 def load_problem(path: str | Path) -> Problem:
-    """Read and validate a YAML problem file."""
-    import yaml
+    """Read and validate a YAML problem file, within the limits of
+    :mod:`optdesign.problem_yaml` (size, nesting, aliases, duplicate keys)."""
+    from .problem_yaml import parse, read_text
 
     path = Path(path)
-    where = path.name
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ProblemError(f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ProblemError(f"{path}: cannot be read ({exc.__class__.__name__})") from None
-    try:
-        data = yaml.load(text, Loader=_yaml_loader())
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line = f" at line {mark.line + 1}" if mark is not None else ""
-        raise ProblemError(f"{where}: not valid YAML{line}") from None
+    where = _printable(path.name) or str(path)
+    data = parse(read_text(path), where)
     if data is None:
         raise ProblemError(f"{where}: the file is empty")
-    return problem_from_dict(data, where=where, default_name=path.stem)
+    return problem_from_dict(data, where=where, default_name=_default_name(path.stem))
+
+
+def _printable(text: str) -> str:
+    """``text`` with every character that would break a one-line message replaced by '?'."""
+    return "".join(c if c.isprintable() else "?" for c in text)
+
+
+def _default_name(stem: str) -> str:
+    """The file's stem as a problem name (a name of at most MAX_NAME_CHARS printable
+    characters), for a file without ``name:``."""
+    return _printable(stem)[:MAX_NAME_CHARS] or "problem"
 
 
 def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "problem") -> Problem:
@@ -194,7 +197,7 @@ def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "pro
     r = Reader(where)
     top = r.mapping(data, "")
     r.known_keys(top, "", TOP_KEYS | set(SECTION_PARSERS))
-    name = r.text(top.get("name", default_name), "name")
+    name = _read_name(r, top.get("name", default_name))
     if "mechanism" not in top:
         raise r.error("mechanism", "is required")
     mechanism_name = r.text(top["mechanism"], "mechanism")
@@ -231,12 +234,47 @@ def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "pro
     for section in sections.values():
         if hasattr(section, "check_problem"):
             section.check_problem(problem)
+    _check_regulated_scale(r, problem)
     count = problem.count_variable.admissible()[0]
     try:
         mech.check_values(problem.start_values(), count)
     except ProblemError as exc:
         raise ProblemError(f"{where}: {exc}") from None
     return problem
+
+
+def _check_regulated_scale(r, problem: Problem) -> None:
+    """The regulated length at its smallest (its least value times the least eccentricity)
+    must be at least MIN_REGULATED_FRACTION of the longest length at its largest: below it
+    the output speeds, O(ratio) against O(1) angles, are lost in rounding (the time mean
+    comes out 0 and δ_mean infinite)."""
+    mech = problem.model
+    reg = mech.regulating_variable
+
+    def least(v):
+        return v.value if v.value is not None else v.lower
+
+    def most(v):
+        return v.value if v.value is not None else v.upper
+
+    smallest = least(problem.design[reg]) * min(problem.eccentricities)
+    longest = max(mech.lengths, key=lambda k: most(problem.design[k]))
+    if smallest < MIN_REGULATED_FRACTION * most(problem.design[longest]):
+        raise r.error(f"design.{reg}", f"times the least eccentricity ({smallest:g}) must be "
+                                       f"at least {MIN_REGULATED_FRACTION:g} of the longest "
+                                       f"length, {longest} = {most(problem.design[longest]):g}"
+                                       f"; the output speeds would be lost in rounding")
+
+
+def _read_name(r, value) -> str:
+    """Text of 1 to MAX_NAME_CHARS printable characters: it becomes a folder's name
+    (results/NAME/, made safe by optdesign.output_checks)."""
+    name = r.text(value, "name", limit=MAX_NAME_CHARS)
+    if not name.strip():
+        raise r.error("name", "must not be empty")
+    if not name.isprintable():
+        raise r.error("name", f"must hold printable characters only (got {shown(name)})")
+    return name
 
 
 def _read_design(r, top, mech) -> dict[str, Variable]:
@@ -280,7 +318,7 @@ def _read_length(r, value, key, spec) -> Variable:
 def _read_count(r, value, key, spec) -> Variable:
     low = int(spec.minimum)
     if not isinstance(value, Mapping):
-        return Variable(spec.name, value=float(r.integer(value, key, low)))
+        return Variable(spec.name, value=float(r.integer(value, key, low, MAX_COUNT)))
     entry = r.mapping(value, key)
     r.known_keys(entry, key, {"lower", "upper", "choices"})
     if "choices" in entry:
@@ -289,13 +327,14 @@ def _read_count(r, value, key, spec) -> Variable:
         items = entry["choices"]
         if not isinstance(items, list) or not items:
             raise r.error(f"{key}.choices", "must be a non-empty list of integers")
-        choices = tuple(sorted({r.integer(c, f"{key}.choices", low) for c in items}))
+        choices = tuple(sorted({r.integer(c, f"{key}.choices", low, MAX_COUNT)
+                                for c in items}))
         return Variable(spec.name, choices=choices)
     for bound in ("lower", "upper"):
         if bound not in entry:
             raise r.error(f"{key}.{bound}", "is required (or give choices)")
-    lower = r.integer(entry["lower"], f"{key}.lower", low)
-    upper = r.integer(entry["upper"], f"{key}.upper", low)
+    lower = r.integer(entry["lower"], f"{key}.lower", low, MAX_COUNT)
+    upper = r.integer(entry["upper"], f"{key}.upper", low, MAX_COUNT)
     if upper < lower:
         raise r.error(f"{key}.upper", f"must not be below lower (got {upper} < {lower})")
     return Variable(spec.name, choices=tuple(range(lower, upper + 1)))
@@ -381,11 +420,17 @@ def _read_regulation(r, raw) -> tuple[float, ...]:
     values = raw.get("eccentricity", [1.0])
     if not isinstance(values, list) or not values:
         raise r.error("regulation.eccentricity", "must be a non-empty list of fractions in (0, 1]")
+    if len(values) > MAX_ECCENTRICITIES:
+        raise r.error("regulation.eccentricity", f"must list at most {MAX_ECCENTRICITIES} "
+                                                 f"fractions (got {len(values)})")
     out = []
     for v in values:
         e = r.number(v, "regulation.eccentricity", positive=True)
         if e > 1:
             raise r.error("regulation.eccentricity", f"fractions must lie in (0, 1] (got {e:g})")
+        if e < MIN_ECCENTRICITY:
+            raise r.error("regulation.eccentricity", f"fractions must be at least "
+                                                     f"{MIN_ECCENTRICITY:g} (got {e:g})")
         out.append(e)
     return tuple(out)
 
@@ -396,12 +441,14 @@ def _read_solver(r, raw) -> SolverSettings:
                                       "max_iter", "hessian", "peak_samples", "screen",
                                       "basins", "workers"})
     kw = {}
-    for key, low in (("samples", 16), ("starts", 1), ("agree", 1), ("seed", 0),
-                     ("max_iter", 1), ("screen", 1), ("basins", 1), ("workers", 0)):
+    for key, (low, high) in SOLVER_INTEGERS.items():
         if key in raw:
-            kw[key] = r.integer(raw[key], f"solver.{key}", low)
+            kw[key] = r.integer(raw[key], f"solver.{key}", low, high)
     if "smoothing" in raw:
         kw["smoothing"] = r.number(raw["smoothing"], "solver.smoothing", positive=True)
+        if kw["smoothing"] > SMOOTHING_MAX:
+            raise r.error("solver.smoothing", f"must be at most {SMOOTHING_MAX:g} "
+                                              f"(got {kw['smoothing']:g})")
     if "peak_samples" in raw:
         if not isinstance(raw["peak_samples"], bool):
             raise r.error("solver.peak_samples", "must be true or false")
@@ -438,35 +485,53 @@ class Reader:
                                 f"(got {type(value).__name__})"))
         for k in value:
             if not isinstance(k, str):
-                raise self.error(key, f"has a key that is not text: {k!r}")
+                raise self.error(key, f"has a key that is not text: {shown(k)}")
         return dict(value)
 
     def known_keys(self, value: Mapping, key: str, allowed: set[str]) -> None:
         for k in value:
             if k not in allowed:
+                k = k if k.isprintable() and len(k) <= 40 else shown(k, 40)
                 path = f"{key}.{k}" if key else k
                 raise self.error(path, f"is not a known key; known: {', '.join(sorted(allowed))}")
 
     def number(self, value, key, positive=False) -> float:
+        """A finite float; unless zero, its magnitude within NUMBER_MAGNITUDE."""
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.error(key, f"must be a number (got {value!r})")
-        value = float(value)
+            raise self.error(key, f"must be a number (got {shown(value)})")
+        low, high = NUMBER_MAGNITUDE
+        try:
+            value = float(value)
+        except OverflowError:
+            raise self.error(key, f"must be finite and at most {high:g} in magnitude "
+                                  f"(got an integer of {value.bit_length()} bits)") from None
         if not math.isfinite(value):
             raise self.error(key, f"must be finite (got {value})")
         if positive and value <= 0:
             raise self.error(key, f"must be positive (got {value:g})")
+        if value != 0 and not low <= abs(value) <= high:
+            span = f"between {low:g} and {high:g}" if positive else \
+                f"0 or of a magnitude between {low:g} and {high:g}"
+            raise self.error(key, f"must be {span} (got {value:g})")
         return value
 
-    def integer(self, value, key, minimum) -> int:
+    def integer(self, value, key, minimum, maximum=MAX_INTEGER) -> int:
+        """A whole number in [minimum, maximum] (a float such as 4.0 or 1e3 is one)."""
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.error(key, f"must be an integer (got {value!r})")
+            raise self.error(key, f"must be an integer (got {shown(value)})")
         if isinstance(value, float) and (not math.isfinite(value) or value != int(value)):
             raise self.error(key, f"must be a whole number (got {value})")
-        if int(value) < minimum:
-            raise self.error(key, f"must be at least {minimum} (got {int(value)})")
+        got = f"{value:g}" if isinstance(value, float) else shown(value)
+        if value < minimum:
+            raise self.error(key, f"must be at least {minimum} (got {got})")
+        if value > maximum:
+            raise self.error(key, f"must be at most {maximum} (got {got})")
         return int(value)
 
-    def text(self, value, key) -> str:
+    def text(self, value, key, limit=MAX_TEXT_CHARS) -> str:
+        """Text of at most ``limit`` characters."""
         if not isinstance(value, str):
-            raise self.error(key, f"must be text (got {value!r})")
+            raise self.error(key, f"must be text (got {shown(value)})")
+        if len(value) > limit:
+            raise self.error(key, f"must be at most {limit} characters (got {len(value)})")
         return value

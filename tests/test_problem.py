@@ -3,10 +3,11 @@ import subprocess
 import sys
 
 import pytest
+import yaml
 
 from optdesign.cli import main
 from optdesign.errors import ProblemError
-from optdesign.problem import load_problem
+from optdesign.problem import SOLVER_INTEGERS, load_problem
 from tests.conftest import ROOT, base_problem
 
 
@@ -145,3 +146,63 @@ def test_exponent_numbers_without_a_dot_are_numbers(write_problem):
     text = text.replace("l0: 225", "l0: 2.25E2").replace("l3: 56", "l3: 56e0")
     p = load_problem(write_problem(text))
     assert p.input_speed == 97.0 and p.design["l0"].value == 225.0 and p.design["l3"].value == 56
+
+
+# --------------------------------------------------------------------------- limits
+@pytest.mark.parametrize("key", sorted(SOLVER_INTEGERS))
+def test_solver_integers_have_both_limits(write_problem, key):
+    low, high = SOLVER_INTEGERS[key]
+    assert getattr(load_problem(write_problem(base_problem(solver={key: high}))).solver,
+                   key) == high
+    with pytest.raises(ProblemError, match=rf"solver\.{key} must be at most {high} "
+                                           rf"\(got {high + 1}\)"):
+        load_problem(write_problem(base_problem(solver={key: high + 1})))
+    if low > 0:
+        with pytest.raises(ProblemError, match=rf"solver\.{key} must be at least {low}"):
+            load_problem(write_problem(base_problem(solver={key: low - 1})))
+
+
+@pytest.mark.parametrize("count, ok", [(64, True), (65, False)])
+def test_the_count_has_an_upper_limit(write_problem, count, ok):
+    path = write_problem(design(phases={"lower": 2, "upper": count}))
+    if ok:
+        assert load_problem(path).counts()[-1] == count
+    else:
+        with pytest.raises(ProblemError, match=r"design\.phases\.upper must be at most 64"):
+            load_problem(path)
+
+
+@pytest.mark.parametrize("value, message", [
+    (-1e-200, r"objective\.min_ratio must be 0 or of a magnitude between 1e-100 and 1e\+100"),
+    (1e101, r"objective\.min_ratio must be 0 or of a magnitude between"),
+    (10 ** 400, r"objective\.min_ratio must be finite and at most 1e\+100 in magnitude"),
+])
+def test_numbers_outside_the_magnitude_range(write_problem, value, message):
+    with pytest.raises(ProblemError, match=message):
+        load_problem(write_problem(base_problem(objective={"min_ratio": value})))
+
+
+def test_zero_and_the_range_ends_are_accepted(write_problem):
+    p = load_problem(write_problem(base_problem(input_speed=1e100, objective={"min_ratio": 0})))
+    assert p.input_speed == 1e100 and p.objective.min_ratio == 0
+    assert load_problem(write_problem(base_problem(input_speed=1e-100))).input_speed == 1e-100
+
+
+def test_a_merge_key_overridden_is_not_a_duplicate(write_problem):
+    text = (ROOT / "problems" / "sharkov2022.yaml").read_text().replace(
+        "objective:\n", "objective:\n  <<: {ripple: mean, min_ratio: 0.1}\n")
+    p = load_problem(write_problem(text))
+    assert p.objective.ripple == "midrange" and p.objective.min_ratio == 0.0
+
+
+def test_a_name_from_a_long_file_stem_is_cut_to_the_limit(tmp_path):
+    data = base_problem()
+    del data["name"]
+    path = tmp_path / ("n" * 150 + ".yaml")
+    path.write_text(yaml.safe_dump(data))
+    assert load_problem(path).name == "n" * 100
+
+
+def test_text_values_have_a_length_limit(write_problem):
+    with pytest.raises(ProblemError, match=r"stroke must be at most 100 characters \(got 101\)"):
+        load_problem(write_problem(base_problem(stroke="f" * 101)))

@@ -1,8 +1,6 @@
 """``optdesign analyze PROBLEM.yaml [--json]``."""
 from __future__ import annotations
 
-import json
-
 
 def add_parser(sub) -> None:
     p = sub.add_parser("analyze", help="evaluate the problem's design exactly")
@@ -13,12 +11,13 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from ..analysis import analyze, format_analysis
+    from ..io import json_text
     from ..problem import load_problem
 
     problem = load_problem(args.problem)
     result = analyze(problem)
     if args.json:
-        print(json.dumps(result.to_dict(), indent=2))
+        print(json_text(result.to_dict()))
     else:
         print(format_analysis(result, problem.name))
     return 0 if result.assembles else 1

@@ -4,10 +4,9 @@ Error of δ, the ratio and ω_min against run time for every evaluator (optdesig
 """
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
 DEFAULT_PROBLEM = "problems/sharkov2022.yaml"
+#: most crank samples of --crosscheck (sampled in chunks: time grows, memory does not)
+MAX_CROSSCHECK = 100_000_000
 
 
 def add_parser(sub) -> None:
@@ -29,24 +28,29 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from ..accuracy import accuracy_rows, format_table
-    from ..errors import ProblemError
+    from ..errors import ProblemError, UsageError
+    from ..io import json_text
+    from ..output_checks import prepare_out
     from ..outputs import write_accuracy
     from ..problem import load_problem
 
     problem = load_problem(args.problem)
     if args.crosscheck < 0:
-        raise ProblemError(f"--crosscheck must not be negative (got {args.crosscheck})")
+        raise UsageError(f"--crosscheck must not be negative (got {args.crosscheck})")
+    if args.crosscheck > MAX_CROSSCHECK:
+        raise UsageError(f"--crosscheck must be at most {MAX_CROSSCHECK} "
+                         f"(got {args.crosscheck})")
     solve_problem = load_problem(args.solve) if args.solve else None
     if solve_problem is not None and not solve_problem.free_lengths():
         raise ProblemError(f"{solve_problem.source}: --solve needs a problem with free lengths")
+    out = prepare_out(args.out, problem.name, files=("accuracy.json", "accuracy.png"))
     rows, ref = accuracy_rows(problem, crosscheck_samples=args.crosscheck,
                               solve_problem=solve_problem, quick=args.quick)
-    out = Path(args.out) if args.out else Path("results") / problem.name
     payload = {"problem": problem.name, "reference": {"method": ref.method,
                **ref.figures.to_dict(), "crosscheck": ref.crosscheck}, "rows": rows}
     files = write_accuracy(payload, rows, problem, out, plot=not args.no_plot)
     if args.json:
-        print(json.dumps(payload, indent=2))
+        print(json_text(payload))
     else:
         print(format_table(rows, ref))
         print(f"wrote {', '.join(str(f) for f in files)}")

@@ -1,7 +1,8 @@
 """``optdesign curves PROBLEM.yaml [--out DIR]``: position, velocity and acceleration analogues."""
 from __future__ import annotations
 
-from pathlib import Path
+#: most crank samples of --samples (a figure of 1441 is already smooth)
+MAX_SAMPLES = 100_000
 
 
 def add_parser(sub) -> None:
@@ -18,19 +19,25 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     from ..curves import member_curves
     from ..design import Design
-    from ..errors import ProblemError
+    from ..errors import UsageError
+    from ..output_checks import prepare_out
     from ..outputs import write_curves
-    from ..problem import load_problem
+    from ..problem import MIN_ECCENTRICITY, load_problem
 
     problem = load_problem(args.problem)
     if not 0 < args.eccentricity <= 1:
-        raise ProblemError(f"--eccentricity must lie in (0, 1] (got {args.eccentricity:g})")
+        raise UsageError(f"--eccentricity must lie in (0, 1] (got {args.eccentricity:g})")
+    if args.eccentricity < MIN_ECCENTRICITY:
+        raise UsageError(f"--eccentricity must be at least {MIN_ECCENTRICITY:g} "
+                         f"(got {args.eccentricity:g})")
     if args.samples < 16:
-        raise ProblemError(f"--samples must be at least 16 (got {args.samples})")
+        raise UsageError(f"--samples must be at least 16 (got {args.samples})")
+    if args.samples > MAX_SAMPLES:
+        raise UsageError(f"--samples must be at most {MAX_SAMPLES} (got {args.samples})")
+    out = prepare_out(args.out, problem.name, files=("curves.png",))
     design = Design.from_problem(problem)
     design.check_assembly(args.eccentricity)          # AssemblyError: exit 1, names the chain
     curves = member_curves(design, problem.stroke, args.eccentricity, args.samples)
-    out = Path(args.out) if args.out else Path("results") / problem.name
     path = write_curves(curves, f"{problem.name}: {problem.mechanism}, "
                                 f"e = {args.eccentricity:g}", out)
     print(path)

@@ -1,8 +1,6 @@
 """``optdesign driveline PROBLEM.yaml [--out DIR]``: the shaft's figure, DIR/driveline.png."""
 from __future__ import annotations
 
-from pathlib import Path
-
 
 def add_parser(sub) -> None:
     p = sub.add_parser("driveline", help="plot the cardan shaft's bend and imbalance "
@@ -14,15 +12,15 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from ..analysis import analyze
+    from ..output_checks import prepare_out
     from ..outputs import write_driveline
     from ..problem import load_problem
 
     problem = load_problem(args.problem)
     section = problem.require_section("driveline")
+    out = prepare_out(args.out, problem.name, files=("driveline.png",))
     result = analyze(problem)
     figures = result.sections["driveline"]
-    out = Path(args.out) if args.out else Path("results") / problem.name
-    out.mkdir(parents=True, exist_ok=True)
     path = out / "driveline.png"
     write_driveline(section, path, operating_speed=figures.get("operating_speed_rad_s"),
                  speed_limit=figures.get("speed_limit_rad_s"))

@@ -2,14 +2,19 @@
 [--scheduler ADDRESS] [--no-report]``."""
 from __future__ import annotations
 
+import os
 from pathlib import Path
+
+#: most ε values of --points: pareto.section.MAX_POINTS (not imported here: the pareto
+#: package pulls in pandas, and building the parser must stay light)
+MAX_POINTS = 1000
 
 
 def add_parser(sub) -> None:
     p = sub.add_parser("pareto", help="sweep the ripple/ratio front of every phase count")
     p.add_argument("problem", help="problem file (YAML)")
     p.add_argument("--out", help="output folder (default results/NAME_pareto/)")
-    p.add_argument("--points", type=_positive(2), help="ε values per phase count "
+    p.add_argument("--points", type=_positive(2, MAX_POINTS), help="ε values per phase count "
                                                         "(default: pareto.points, else 12)")
     p.add_argument("--workers", type=_positive(1), help="local worker processes "
                                                          "(default: every core)")
@@ -21,7 +26,7 @@ def add_parser(sub) -> None:
     p.set_defaults(run=run)
 
 
-def _positive(low):
+def _positive(low, high=None):
     def check(text):
         import argparse
         try:
@@ -30,36 +35,73 @@ def _positive(low):
             raise argparse.ArgumentTypeError(f"must be an integer (got {text!r})") from None
         if value < low:
             raise argparse.ArgumentTypeError(f"must be at least {low} (got {value})")
+        if high is not None and value > high:
+            raise argparse.ArgumentTypeError(f"must be at most {high} (got {value})")
         return value
     return check
 
 
 def run(args) -> int:
     from ..errors import ProblemError
+    from ..lifetime import exit_on_sigterm
+    from ..output_checks import default_out, prepare_out
+    from ..output_dir import OutputFolder
     from ..pareto import sweep
-    from ..outputs import write_front, write_report
+    from ..outputs import PARETO_FILES, write_front, write_report
     from ..pareto.report import summary_text
     from ..problem import load_problem
 
     problem = load_problem(args.problem)
-    out = Path(args.out) if args.out else Path("results") / f"{problem.name}_pareto"
-    if args.resume and not (out / "points.jsonl").exists():
+    if not problem.free_lengths():          # nothing to trade: say so before any work
+        raise ProblemError(f"{Path(args.problem).name}: design: a front needs a free length "
+                           f"(give one a range, e.g. {{lower: 30, upper: 90}}); every length "
+                           f"is fixed")
+    out = Path(args.out) if args.out is not None else default_out(problem.name, "_pareto")
+    if args.resume and not os.path.exists(out / "points.jsonl"):
         raise ProblemError(f"{out / 'points.jsonl'}: nothing to resume (no journal there)")
-    if args.scheduler:
-        try:
-            import distributed  # noqa: F401
-        except ImportError:
-            raise ProblemError("--scheduler needs dask distributed: pip install "
-                               "'optdesign[cluster]'") from None
-    result = sweep(problem, out, points=args.points, workers=args.workers,
-                   resume=args.resume, scheduler=args.scheduler)
-    files = write_front(result, out)
-    if not args.no_report:
-        command = " ".join(["optdesign pareto", args.problem, "--out", str(out)] + [
-            f"--{k} {getattr(args, k)}" for k in ("points", "workers", "scheduler")
-            if getattr(args, k)] + (["--resume"] if args.resume else []))
-        files += write_report(result, problem, out, problem_path=args.problem,
-                              command=command)
+    out = prepare_out(args.out, problem.name, "_pareto", files=PARETO_FILES)
+    # one run at a time in ``out``; a fresh sweep clears the previous one's files first, so
+    # the folder never holds files of two runs (docs/contract.md)
+    with _connected(args.scheduler) as scheduler, exit_on_sigterm(), \
+            OutputFolder(out, PARETO_FILES) as folder:
+        if not args.resume:
+            folder.remove_owned()
+        result = sweep(problem, out, points=args.points, workers=args.workers,
+                       resume=args.resume, scheduler=scheduler)
+        files = write_front(result, out)
+        if not args.no_report:
+            command = " ".join(["optdesign pareto", args.problem, "--out", str(out)] + [
+                f"--{k} {getattr(args, k)}" for k in ("points", "workers", "scheduler")
+                if getattr(args, k)] + (["--resume"] if args.resume else []))
+            files += write_report(result, problem, out, problem_path=args.problem,
+                                  command=command)
     print(summary_text(result))
     print(f"wrote {', '.join(str(f) for f in files)}")
     return 0 if result.indicators["n_points"] else 1
+
+
+#: seconds to reach a --scheduler before giving up (exit 2)
+SCHEDULER_TIMEOUT_S = 3
+
+
+def _connected(address):
+    """A Dask client of ``address``, connected within SCHEDULER_TIMEOUT_S (a context
+    manager; ``None`` inside when no scheduler is given). An address that is malformed or
+    where no scheduler answers is a usage error, found before any work."""
+    from contextlib import nullcontext
+
+    from ..errors import UsageError, shown
+
+    if address is None:
+        return nullcontext(None)
+    try:
+        from distributed import Client
+    except ImportError:
+        raise UsageError("--scheduler needs dask distributed: pip install "
+                         "'optdesign[cluster]'") from None
+    try:
+        return Client(address, timeout=SCHEDULER_TIMEOUT_S)
+    except (OSError, ValueError, TypeError) as exc:
+        reason = "malformed address" if isinstance(exc, (ValueError, TypeError)) else \
+            f"no scheduler answered within {SCHEDULER_TIMEOUT_S} s"
+        raise UsageError(f"--scheduler {shown(address)}: {reason}") from None

@@ -1,9 +1,7 @@
 """``optdesign solve PROBLEM.yaml [--out DIR] [--json] [--no-plots]``."""
 from __future__ import annotations
 
-import json
 import sys
-from pathlib import Path
 
 
 def add_parser(sub) -> None:
@@ -16,20 +14,28 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
+    from ..io import json_text
+    from ..output_checks import prepare_out
     from ..problem import load_problem
     from ..solve import solve
-    from ..outputs import write_solve
+    from ..lifetime import exit_on_sigterm, raise_if_terminated
+    from ..output_dir import OutputFolder
+    from ..outputs import SOLVE_FILES, write_solve
     from ..solve.outputs import summary_text
 
     problem = load_problem(args.problem)
-    from tqdm import tqdm
-    with tqdm(total=len(problem.counts()), desc="phase counts", unit="count", file=sys.stderr,
-              disable=None, leave=False) as bar:
-        result = solve(problem, progress=bar.update)
-    out = Path(args.out) if args.out else Path("results") / problem.name
-    files = write_solve(result, problem, out, plots=not args.no_plots)
+    out = prepare_out(args.out, problem.name, files=SOLVE_FILES)     # before any work
+    # one run at a time in ``out``; its set replaces the previous one whole (docs/contract.md)
+    with exit_on_sigterm(), OutputFolder(out, SOLVE_FILES) as folder:
+        from tqdm import tqdm
+        with tqdm(total=len(problem.counts()), desc="phase counts", unit="count",
+                  file=sys.stderr, disable=None, leave=False) as bar:
+            result = solve(problem, progress=bar.update)
+        raise_if_terminated()                     # nothing published after a SIGTERM
+        files = folder.replace_with(
+            lambda into: write_solve(result, problem, into, plots=not args.no_plots))
     if args.json:
-        print(json.dumps(result.to_dict(), indent=2))
+        print(json_text(result.to_dict()))
     else:
         print(summary_text(result, problem))
         print(f"wrote {', '.join(str(f) for f in files)}")

@@ -40,6 +40,8 @@ STEEL_DENSITY_KG_M3 = 7850.0
 DEFAULT_STRAIGHTNESS_CLASS = "normal"     # the loosest class: the largest initial bend
 CONSTRAINT_KEY = "max_speed_fraction_of_critical"
 G_MM_PER_KG_M = 1e6                       # 1 kg·m = 1e3 g × 1e3 mm
+#: thinnest wall, as a fraction of the outer diameter: below it D⁴ - d⁴ loses every digit
+MIN_WALL_FRACTION = 1e-6
 RPM_PER_RAD_S = 30.0 / np.pi
 
 
@@ -256,9 +258,18 @@ def parse_section(raw, reader) -> DrivelineSection:
             raise reader.error(key, f"must be less than half of length_mm, {0.5 * length:g} "
                                     f"(got {planes[key]:g})")
 
-    mass_per_length, EI = _read_stiffness(raw, reader)
-    y0_max, y0_source = _read_straightness(raw, reader, length)
-    w_cr = model.first_critical_speed(length * 1e-3, EI, mass_per_length)
+    try:
+        with np.errstate(all="ignore"):
+            mass_per_length, EI = _read_stiffness(raw, reader)
+            y0_max, y0_source = _read_straightness(raw, reader, length)
+            _check_derived(reader, mass_per_length_kg_m=mass_per_length, EI_n_m2=EI,
+                           mass_kg=mass_per_length * length * 1e-3, y0_max_mm=y0_max * 1e3,
+                           EI_over_mass_per_length=EI / mass_per_length)
+            w_cr = model.first_critical_speed(length * 1e-3, EI, mass_per_length)
+            _check_derived(reader, critical_speed_rad_s=w_cr, beta_s2=1.0 / w_cr**2)
+    except (OverflowError, ZeroDivisionError):
+        raise reader.error("", "describes a shaft whose figures overflow double precision; "
+                               "check the units") from None
     balancing = optional("balancing_speed_rad_s", 0.0, positive=False)
     if balancing < 0:
         raise reader.error("balancing_speed_rad_s", f"must not be negative (got {balancing:g})")
@@ -298,12 +309,25 @@ def _read_stiffness(raw, reader) -> tuple[float, float]:
     if wall > 0.5 * outer:
         raise reader.error("wall_mm", f"must not exceed half of outer_diameter_mm, {0.5 * outer:g}"
                                       f" (got {wall:g})")
+    if wall < MIN_WALL_FRACTION * outer:
+        raise reader.error("wall_mm", f"must be at least {MIN_WALL_FRACTION:g} of "
+                                      f"outer_diameter_mm, {MIN_WALL_FRACTION * outer:g} "
+                                      f"(got {wall:g})")
     E = reader.number(raw.get("youngs_modulus_gpa", STEEL_YOUNGS_MODULUS_GPA),
                       "youngs_modulus_gpa", positive=True)
     rho = reader.number(raw.get("density_kg_m3", STEEL_DENSITY_KG_M3), "density_kg_m3",
                         positive=True)
     area, second_moment = model.tube_section(outer * 1e-3, wall * 1e-3)
     return rho * area, E * 1e9 * second_moment
+
+
+def _check_derived(reader, **figures) -> None:
+    """Figures derived from the section's numbers must be finite and positive: extreme but
+    accepted numbers (a tube a light-year wide) must not reach the model as 0 or inf."""
+    for name, value in figures.items():
+        if not (np.isfinite(value) and value > 0):
+            raise reader.error("", f"describes a shaft whose {name} is {value:g}, not a "
+                                   f"finite positive number; check the units")
 
 
 def _read_straightness(raw, reader, length_mm) -> tuple[float, str]:

@@ -4,7 +4,9 @@ point finishes, so a killed run loses nothing that was written and ``--resume`` 
 A line is a *record*: ``{"key": [phases, tag], ...}``, tag ``"least_ripple"`` or
 ``"largest_ratio"`` for the two end-point solves of a phase count and the integer grid index
 for the ε points. The first line holds the run's settings (``{"key": "run", ...}``) and resume
-refuses a journal written for other settings.
+refuses a journal written for other settings, and a damaged one (no settings line, a line in
+the middle that is not a record): it names the file and never rewrites it. Only a last line
+without its newline, cut short by a kill, is dropped.
 """
 from __future__ import annotations
 
@@ -13,7 +15,7 @@ import os
 from pathlib import Path
 
 from ..errors import ProblemError
-from ..io import _jsonable, atomic_write_text
+from ..io import atomic_write_text, json_text
 
 
 class Journal:
@@ -38,31 +40,89 @@ class Journal:
                 records.append(rec)
         return header, records
 
+    def read_to_resume(self) -> tuple[dict, list[dict], bool]:
+        """(run settings, records, whole): the journal checked line by line; ``whole`` is
+        False when its last line was cut short by a kill (then dropped).
+
+        Raises
+        ------
+        ProblemError
+            The journal is damaged: unreadable, no settings line first, or a line other than
+            the last that is not a record.
+        """
+        def damaged(what):
+            return ProblemError(f"{self.path}: damaged journal ({what}); it is left as it "
+                                f"is: run without --resume to start afresh")
+
+        try:
+            text = self.path.read_text(encoding="utf-8")
+        except UnicodeDecodeError:
+            raise damaged("not UTF-8 text") from None
+        lines = text.split("\n")
+        whole = lines[-1] == ""
+        lines = lines[:-1] if whole else lines
+        parsed = []
+        for number, line in enumerate(lines, 1):
+            rec = _record(line)
+            if rec is None:
+                if number == len(lines) and not whole:
+                    break                                # cut short by a kill: dropped
+                raise damaged(f"line {number} is not a record")
+            if (rec["key"] == "run") != (number == 1):
+                raise damaged("the first line is not the run's settings" if number == 1
+                              else f"line {number} repeats the run's settings")
+            parsed.append(rec)
+        if not parsed:
+            raise damaged("no settings line")
+        return parsed[0], parsed[1:], whole
+
     def start(self, settings: dict, resume: bool) -> list[dict]:
         """Open the journal for a run; returns the records a resumed run keeps."""
-        header, records = self.read()
-        if resume and header is not None:
+        if resume and self.path.exists():
+            header, records, whole = self.read_to_resume()
             old = {k: v for k, v in header.items() if k != "key"}
-            if old != json.loads(json.dumps(settings, default=_jsonable)):
+            if old != json.loads(_line(settings)):
                 changed = sorted(k for k in set(old) | set(settings)
                                  if old.get(k) != settings.get(k))
                 raise ProblemError(f"{self.path}: cannot resume, the run's settings changed "
                                    f"({', '.join(changed)}); run without --resume to start "
                                    f"afresh")
-            # drop a line a kill cut short, so the next append starts on a line of its own
-            lines = [json.dumps(r, default=_jsonable) for r in [header, *records]]
-            atomic_write_text(self.path, "\n".join(lines) + "\n")
+            if not whole:
+                # drop the line a kill cut short, so the next append starts a line of its own
+                lines = [_line(r) for r in [header, *records]]
+                atomic_write_text(self.path, "\n".join(lines) + "\n")
             return records
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.path.write_text("", encoding="utf-8")
-        self.append({"key": "run"} | settings)
+        # a fresh journal: the settings line alone, in place of any old one at once
+        atomic_write_text(self.path, _line({"key": "run"} | settings) + "\n")
         return []
 
     def append(self, record: dict) -> None:
-        line = json.dumps(record, default=_jsonable) + "\n"
+        line = _line(record) + "\n"
         fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
         try:
             os.write(fd, line.encode("utf-8"))      # one write per line: whole or nothing
             os.fsync(fd)
         finally:
             os.close(fd)
+
+
+def _record(line: str) -> dict | None:
+    """The record a journal line holds, or None when it holds none (not JSON, not an object,
+    no key, a key that is neither ``"run"`` nor ``[phases, tag]``)."""
+    try:
+        rec = json.loads(line)
+    except json.JSONDecodeError:
+        return None
+    if not isinstance(rec, dict):
+        return None
+    key = rec.get("key")
+    if key == "run" or (isinstance(key, list) and len(key) == 2 and isinstance(key[0], int)
+                        and isinstance(key[1], (int, str))):
+        return rec
+    return None
+
+
+def _line(record: dict) -> str:
+    """One journal line: strict JSON (a NaN is null), no ``non_finite`` key (a record is a
+    table row when read back)."""
+    return json_text(record, indent=None, reasons=False)

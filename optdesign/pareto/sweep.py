@@ -20,7 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import ProblemError
 from . import worker
+from ..errors import OptDesignError
+from ..lifetime import die_with_parent, raise_if_terminated
 from ..outputs import write_front
 from .front import ParetoResult, evaluate, frame
 from .section import DEFAULT_POINTS, ParetoSection
@@ -64,12 +67,14 @@ class _Inline:
 
 class _Pool:
     """Local worker processes. Forked where the platform can (the parent holds no built NLP,
-    and a forked worker needs no ``if __name__ == "__main__"`` guard in the caller's script)."""
+    and a forked worker needs no ``if __name__ == "__main__"`` guard in the caller's script).
+    Each worker ends when this process dies, even by ``kill -9`` (:mod:`optdesign.lifetime`)."""
 
     def __init__(self, workers: int):
         import multiprocessing as mp
         method = "fork" if "fork" in mp.get_all_start_methods() else "spawn"
-        self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context(method))
+        self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context(method),
+                                        initializer=die_with_parent, initargs=(os.getpid(),))
 
     def submit(self, fn, *args):
         return self.pool.submit(fn, *args)
@@ -96,8 +101,17 @@ class _Dask:
         return self.client.submit(fn, *args, pure=False)
 
     def wait_any(self, futures):
+        """The finished futures; a worker lost is Dask's affair (its tasks go to another),
+        the scheduler lost ends the sweep with one line (the journal keeps the points)."""
         from distributed import wait
-        return wait(list(futures), return_when="FIRST_COMPLETED").done
+        from distributed.client import FutureCancelledError, FuturesCancelledError
+        try:
+            return wait(list(futures), return_when="FIRST_COMPLETED").done
+        except (FutureCancelledError, FuturesCancelledError, OSError):
+            raise OptDesignError(
+                f"--scheduler {self.client.scheduler.address}: lost the scheduler; every "
+                f"finished point is in the journal: restart the cluster and run again with "
+                f"--resume") from None
 
     def close(self, interrupted: bool = False):
         if self.own:
@@ -143,6 +157,9 @@ def sweep(problem, out_dir, points: int | None = None, workers: int | None = Non
     scheduler : str or distributed.Client, optional
         Run the tasks on this Dask cluster instead of local processes.
     """
+    if not problem.free_lengths():
+        raise ProblemError(f"{problem.name}: design: a front needs a free length (give one a "
+                           f"range, e.g. l3: {{lower: 30, upper: 90}}); every length is fixed")
     run = _Sweep(problem, out_dir, points, workers, resume, scheduler, progress)
     return run.run()
 
@@ -186,6 +203,7 @@ class _Sweep:
                 if not missing:
                     self.open_count(n)
             while self.running:
+                raise_if_terminated()
                 for fut in self.ex.wait_any(list(self.running)):
                     count, j = self.running.pop(fut)
                     self.finish(fut.result())

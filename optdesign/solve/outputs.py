@@ -8,13 +8,15 @@ def summary_text(result, problem) -> str:
     lines = [f"{problem.name}: {result.status} ({problem.mechanism}, {problem.stroke} stroke, "
              f"ω1 = {problem.input_speed:g} rad/s)"]
     if result.design:
-        lines.append("design: " + ", ".join(f"{k} = {v:.4f}" if isinstance(v, float) else
-                                            f"{k} = {v}" for k, v in result.design.items()))
+        lengths = set(problem.model.lengths)
+        lines.append("design: " + ", ".join(f"{k} = {v:.4f} mm" if k in lengths else
+                                            f"{k} = {v:g}" for k, v in result.design.items()))
         lines.append(f"δ ({problem.objective.ripple}, worst over e = "
                      f"{', '.join(f'{e:g}' for e in problem.eccentricities)}) = "
                      f"{result.delta:.6f}; ratio = {result.ratio:.6f}; least transmission "
                      f"angle = {result.min_transmission_angle_deg:.2f} deg")
         lines.append(binding_text(result.active, problem))
+        lines += bound_warnings(result, problem)
     else:
         lines.append(result.message)
     lines.append(f"solve time {result.solve_time_s:.2f} s, {result.iterations} IPOPT iterations")
@@ -38,3 +40,19 @@ def binding_text(active: list[dict], problem) -> str:
     return "binding: " + "; ".join(
         f"{a['name']} (d{what}/d bound = {a['sensitivity']:+.3g}"
         f"{'' if a['unit'] == '-' else ' per ' + a['unit']})" for a in active)
+
+
+def bound_warnings(result, problem) -> list[str]:
+    """A warning per free length the optimum rests on a bound of: the design would go past
+    it, so the bound shapes the result (is it a real limit, or a first guess?)."""
+    out = []
+    for a in result.active:
+        if a["kind"] != "bound":
+            continue
+        key = a["name"].split()[0]
+        spec = problem.design[key]
+        value = spec.lower if a["side"] == "lower" else spec.upper
+        out.append(f"warning: {key} rests on its {a['side']} bound, {value:g} mm: the "
+                   f"optimum would go past it (dδ/d bound = {a['sensitivity']:+.3g} per mm); "
+                   f"check that the bound is a real limit")
+    return out

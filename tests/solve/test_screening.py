@@ -99,3 +99,21 @@ def test_the_jacobian_needs_few_forward_directions_at_many_phases():
     nlp = PhaseNLP(load_problem(ROOT / "problems" / "sharkov2022_disc.yaml"), 24)
     colours = ca.jacobian_sparsity(nlp.g, nlp.x_sym).uni_coloring().size2()
     assert colours <= 10
+
+
+def test_bounds_of_six_decades_around_a_feasible_design_are_not_infeasible():
+    """Every length bounded to [1e-3, 1e3] mm around the paper's disc problem, whose design is
+    feasible: the screening finds the feasible region and the solve returns an optimum (once
+    this said `infeasible`: no design within the bounds assembles)."""
+    from dataclasses import replace
+
+    from optdesign.problem import load_problem
+    from optdesign.solve.driver import solve_phase
+    from tests.conftest import ROOT
+
+    problem = load_problem(ROOT / "problems" / "sharkov2022_disc.yaml")
+    wide = {k: replace(problem.design[k], lower=1e-3, upper=1e3)
+            for k in problem.free_lengths()}
+    result = solve_phase(replace(problem, design=problem.design | wide), 6)
+    assert result.status == "optimal"
+    assert result.delta < 0.1402049196            # the wider box holds a better design

@@ -19,6 +19,7 @@ MAX_MESSAGE_CHARS = 1000
 
 #: Each command is a module with ``add_parser(subparsers)`` and ``run(args) -> exit code``.
 COMMANDS = [
+    "optdesign.commands.init",
     "optdesign.commands.analyze",
     "optdesign.commands.solve",
     "optdesign.commands.driveline",
@@ -26,6 +27,7 @@ COMMANDS = [
     "optdesign.commands.simulate",
     "optdesign.commands.bench",
     "optdesign.commands.pareto",
+    "optdesign.commands.schema",
 ]
 
 
@@ -49,7 +51,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    os.environ.setdefault("MPLBACKEND", "Agg")      # the command writes figures to files only
+    if argv is None:        # run as the `optdesign` program: it writes figures to files only
+        os.environ.setdefault("MPLBACKEND", "Agg")
     try:
         code = int(args.run(args))
         sys.stdout.flush()              # a closed pipe shows here, not at exit

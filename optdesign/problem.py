@@ -1,10 +1,15 @@
 """Problem files (docs/contract.md), loaded strictly into frozen dataclasses.
 
+Every key is declared once, in the tables below (type, default, unit, range, meaning): the
+readers check values against them, and docs/problem-file.md, ``optdesign schema`` and
+``optdesign init`` are generated from them (optdesign/problem_keys.py).
+
 Every error is a :class:`ProblemError` whose one line names the file and the key path and says
 what would be right: ``pump.yaml: design.l3.upper must exceed lower (got 20 <= 56)``.
 """
 from __future__ import annotations
 
+import difflib
 import math
 from dataclasses import dataclass, field, replace
 from importlib import import_module
@@ -12,8 +17,9 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from .criteria import OBJECTIVES
+from .declarations import REQUIRED, Key, names
 from .errors import ProblemError, shown
-from .mechanisms import get_mechanism
+from .mechanisms import STROKE_SIGNS, get_mechanism, known
 
 #: Optional sections parsed by the module that owns them, imported only when present:
 #: name -> "module:function(section_dict, where) -> parsed object".
@@ -23,8 +29,6 @@ SECTION_PARSERS: dict[str, str] = {
     "pareto": "optdesign.pareto.section:parse_section",
 }
 
-TOP_KEYS = {"name", "mechanism", "input_speed", "stroke", "design", "options", "constraints",
-            "objective", "regulation", "solver"}
 RIPPLE_DEFINITIONS = ("midrange", "mean")
 HESSIANS = ("exact", "limited-memory")
 
@@ -41,10 +45,6 @@ MAX_ECCENTRICITIES = 16
 MIN_ECCENTRICITY = 1e-9         # below it the ratio (∝ e) is lost in rounding
 #: least (regulated length × eccentricity) / longest length: _check_regulated_scale
 MIN_REGULATED_FRACTION = 1e-9
-#: solver keys: (least, most)
-SOLVER_INTEGERS = {"samples": (16, 2000), "starts": (1, 1000), "agree": (1, 100),
-                   "seed": (0, 2**32 - 1), "max_iter": (1, 100_000), "screen": (1, 65_536),
-                   "basins": (1, 64), "workers": (0, 256)}
 SMOOTHING_MAX = 1e6
 
 
@@ -116,6 +116,119 @@ class SolverSettings:
     peak_samples: bool = False          # also bound ω_max at every sample (a safety net)
 
 
+# --------------------------------------------------------------------------- declarations
+# Every key the loader reads, with its type, default, unit, range and meaning: the loader
+# checks values against these tables and docs/problem-file.md, ``optdesign schema`` and
+# ``optdesign init`` are generated from them (optdesign/reference.py). Defaults are the
+# dataclasses' own (``SolverSettings.samples`` is the field's default), so they cannot differ.
+# The design's keys are the mechanism's ``variables``, its options its ``options``.
+TOP_DECLARATIONS: tuple[Key, ...] = (
+    Key("name", "text", "the problem's name; results go to results/NAME/ (every character "
+        "but letters, digits and -_.+ replaced by _)", upper=MAX_NAME_CHARS,
+        default_text="the file's stem"),
+    Key("mechanism", "choice", "the converting mechanism (docs/mechanisms.md)", default=REQUIRED,
+        choices=known),
+    Key("input_speed", "number", "crank speed ω1", unit="rad/s", default=REQUIRED, lower=0,
+        open_lower=True),
+    Key("stroke", "choice", "the stroke whose freewheels drive the output: forward (the rocker "
+        "turning with the crank), reverse, or both (a second output shaft); each mechanism "
+        "offers its own", default="forward", choices=tuple(STROKE_SIGNS)),
+    Key("design", "mapping", "every design key of the mechanism: a number fixes it, a range "
+        "frees it (see \"Fixed or free\")", default=REQUIRED),
+    Key("options", "mapping", "the mechanism's modelling choices",
+        default_text="every option at its default"),
+    Key("constraints", "mapping", "the design's constraints", default_text="every default"),
+    Key("objective", "mapping", "what the solve minimises", default_text="every default"),
+    Key("regulation", "mapping", "the eccentricities at which the ripple is held",
+        default_text="full eccentricity only"),
+    Key("solver", "mapping", "tuning of the solve", default_text="every default"),
+)
+TOP_KEYS = names(TOP_DECLARATIONS)
+
+OBJECTIVE_KEYS: tuple[Key, ...] = (
+    Key("minimize", "choice", "what the solve minimises: ripple (δ, the worst over the listed "
+        "eccentricities) or -ratio (the largest ratio with δ at most max_ripple)",
+        default=Objective.minimize, choices=lambda: tuple(OBJECTIVES)),
+    Key("ripple", "choice", "the denominator of δ = (ω_max − ω_min)/ω_mid: midrange, "
+        "(ω_max + ω_min)/2 as in the papers, or mean, the time mean of the output speed",
+        default=Objective.ripple, choices=RIPPLE_DEFINITIONS),
+    Key("min_ratio", "number", "least ratio: time mean of the output speed / ω1, at full "
+        "eccentricity", unit="-", default=Objective.min_ratio, lower=0),
+    Key("max_ripple", "number", "largest δ allowed", unit="-",
+        default=Objective.max_ripple, default_text="none", lower=0, open_lower=True,
+        example=0.5, condition="required with minimize: -ratio"),
+)
+
+#: constraint keys every mechanism understands; a mechanism declares its own
+#: (``Mechanism.constraint_keys``, e.g. the four-bar's pin radius and Grashof)
+GENERAL_CONSTRAINT_KEYS = {"min_transmission_angle_deg", "assembly_margin"}
+#: constraint keys owned by other modules (e.g. the driveline), kept as given in ``extra``.
+EXTRA_CONSTRAINT_KEYS: set[str] = {"max_speed_fraction_of_critical"}
+#: the section each of those keys needs; the section's object checks the value in its
+#: ``check_problem(problem)``.
+EXTRA_CONSTRAINT_SECTIONS: dict[str, str] = {"max_speed_fraction_of_critical": "driveline"}
+
+#: every ``constraints:`` key: the general ones, those a mechanism declares in its
+#: ``constraint_keys`` (it reads them in ``read_constraints``) and the sections' extras
+CONSTRAINT_KEYS: tuple[Key, ...] = (
+    Key("min_transmission_angle_deg", "number", "least transmission angle min(μ, 180° − μ) "
+        "of every chain over the turn, at every listed eccentricity", unit="deg",
+        default=Constraints.min_transmission_angle_deg, lower=0, upper=90, open_upper=True),
+    Key("assembly_margin", "number", "margin of assembly at every sample (1 − cos²μ for a "
+        "linkage; 1 − L/XD, 1 − r1/a for the slotted lever and the pulse reducer)", unit="-",
+        default=Constraints.assembly_margin, lower=0, upper=1, open_upper=True),
+    Key("min_pin_radius", "number", "least pin radius |AC_i| of the disc (l2 − l2_prime, or "
+        "l2_prime under pin_layout: text): the pins must fit on the disc", unit="mm",
+        default=Constraints.min_pin_radius),
+    Key("grashof", "bool", "chain 1 (O A B1 O1) a Grashof crank-rocker with l1 the crank",
+        default=Constraints.grashof),
+    Key("max_speed_fraction_of_critical", "number", "the cardan shaft's operating speed at "
+        "most this fraction of its first critical speed (docs/driveline.md)", unit="-",
+        default=None, default_text="none", lower=0, upper=1, open_lower=True, open_upper=True,
+        example=0.7, condition="with a driveline: section"),
+)
+
+REGULATION_KEYS: tuple[Key, ...] = (
+    Key("eccentricity", "list", "the fractions e of the regulated length (l1, L, r1) at "
+        "which δ is computed; the solve holds the worst", unit="-", default=[1.0],
+        item=Key("eccentricity", "number", "a fraction of the regulated length",
+                 lower=MIN_ECCENTRICITY, upper=1.0),
+        min_items=1, max_items=MAX_ECCENTRICITIES),
+)
+
+SOLVER_KEYS: tuple[Key, ...] = (
+    Key("samples", "integer", "crank samples per turn in the NLP (docs/accuracy.md)",
+        default=SolverSettings.samples, lower=16, upper=2000),
+    Key("screen", "integer", "designs screened before IPOPT (a Sobol sample of the box)",
+        default=SolverSettings.screen, lower=1, upper=65_536),
+    Key("basins", "integer", "best basins of the screening polished by IPOPT",
+        default=SolverSettings.basins, lower=1, upper=64),
+    Key("workers", "integer", "processes polishing basins at once (0: every core)",
+        default=SolverSettings.workers, lower=0, upper=256),
+    Key("starts", "integer", "most IPOPT polishes per phase count",
+        default=SolverSettings.starts, lower=1, upper=1000),
+    Key("agree", "integer", "a count is infeasible after agree + 1 local-infeasibility "
+        "verdicts on one constraint", default=SolverSettings.agree, lower=1, upper=100),
+    Key("smoothing", "number", "log-sum-exp ρ of the smooth maximum, per unit of ω/ω1",
+        default=SolverSettings.smoothing, lower=0, open_lower=True, upper=SMOOTHING_MAX),
+    Key("seed", "integer", "seed of the screening's sample", default=SolverSettings.seed,
+        lower=0, upper=2**32 - 1),
+    Key("max_iter", "integer", "IPOPT iterations per polish", default=SolverSettings.max_iter,
+        lower=1, upper=100_000),
+    Key("hessian", "choice", "IPOPT's Hessian: a limited-memory quasi-Newton one, or CasADi's "
+        "exact second derivatives", default=SolverSettings.hessian, choices=HESSIANS),
+    Key("peak_samples", "bool", "also bound ω_max at every sample (a safety net)",
+        default=SolverSettings.peak_samples),
+)
+#: solver integers: (least, most), from SOLVER_KEYS
+SOLVER_INTEGERS = {k.name: (int(k.lower), int(k.upper)) for k in SOLVER_KEYS
+                   if k.kind == "integer"}
+
+#: the free range of a length and of a count (docs/problem-file.md, "Fixed or free")
+LENGTH_RANGE_KEYS = ("lower", "upper", "initial")
+COUNT_RANGE_KEYS = ("lower", "upper", "choices")
+
+
 @dataclass(frozen=True)
 class Problem:
     """A loaded problem: what is optimised, independent of how it is solved."""
@@ -178,7 +291,7 @@ def load_problem(path: str | Path) -> Problem:
     data = parse(read_text(path), where)
     if data is None:
         raise ProblemError(f"{where}: the file is empty")
-    return problem_from_dict(data, where=where, default_name=_default_name(path.stem))
+    return problem_from_dict(data, where=where, default_name=name_from_stem(path.stem))
 
 
 def _printable(text: str) -> str:
@@ -186,7 +299,7 @@ def _printable(text: str) -> str:
     return "".join(c if c.isprintable() else "?" for c in text)
 
 
-def _default_name(stem: str) -> str:
+def name_from_stem(stem: str) -> str:
     """The file's stem as a problem name (a name of at most MAX_NAME_CHARS printable
     characters), for a file without ``name:``."""
     return _printable(stem)[:MAX_NAME_CHARS] or "problem"
@@ -293,10 +406,13 @@ def _read_design(r, top, mech) -> dict[str, Variable]:
 
 
 def _read_length(r, value, key, spec) -> Variable:
+    if isinstance(value, list):
+        raise r.error(key, f"must be a number or a range {{lower, upper, initial}} (got a list "
+                           f"{shown(value)}); {_range_hint(spec.name, value)}")
     if not isinstance(value, Mapping):
         return Variable(spec.name, value=r.number(value, key, positive=True))
     entry = r.mapping(value, key)
-    r.known_keys(entry, key, {"lower", "upper", "initial"})
+    r.known_keys(entry, key, set(LENGTH_RANGE_KEYS))
     for bound in ("lower", "upper"):
         if bound not in entry:
             raise r.error(f"{key}.{bound}", "is required for a free variable")
@@ -317,10 +433,14 @@ def _read_length(r, value, key, spec) -> Variable:
 
 def _read_count(r, value, key, spec) -> Variable:
     low = int(spec.minimum)
+    if isinstance(value, list):
+        raise r.error(key, f"must be an integer, a range {{lower, upper}} or {{choices: [...]}} "
+                           f"(got a list {shown(value)}); to try each of them write "
+                           f"{spec.name}: {{choices: {_flow(value)}}}")
     if not isinstance(value, Mapping):
         return Variable(spec.name, value=float(r.integer(value, key, low, MAX_COUNT)))
     entry = r.mapping(value, key)
-    r.known_keys(entry, key, {"lower", "upper", "choices"})
+    r.known_keys(entry, key, set(COUNT_RANGE_KEYS))
     if "choices" in entry:
         if set(entry) != {"choices"}:
             raise r.error(key, "takes either choices or lower/upper, not both")
@@ -340,6 +460,28 @@ def _read_count(r, value, key, spec) -> Variable:
     return Variable(spec.name, choices=tuple(range(lower, upper + 1)))
 
 
+def _range_hint(name: str, items: list) -> str:
+    """How to write the free range a list of numbers was probably meant to be."""
+    numbers = [v for v in items if isinstance(v, (int, float)) and not isinstance(v, bool)
+               and math.isfinite(v)]
+    if len(numbers) == len(items) and len(numbers) in (2, 3):
+        lower, upper = min(numbers[:2]), max(numbers[:2])
+        initial = f", initial: {_flow(numbers[2])}" if len(numbers) == 3 else ""
+        return (f"to free it write {name}: {{lower: {_flow(lower)}, upper: {_flow(upper)}"
+                f"{initial}}}")
+    return f"to free it write {name}: {{lower: L, upper: U}}"
+
+
+def _flow(value) -> str:
+    """``value`` as short YAML flow text, for a message's suggestion."""
+    if isinstance(value, list):
+        return "[" + ", ".join(_flow(v) for v in value[:8]) + (", ..." if len(value) > 8 else "") \
+            + "]"
+    if isinstance(value, float) and value.is_integer() and abs(value) < 1e15:
+        return str(int(value))
+    return shown(value, 20)
+
+
 def _read_options(r, raw, mech) -> dict[str, str]:
     raw = r.mapping(raw, "options")
     specs = {o.name: o for o in mech.options}
@@ -354,34 +496,12 @@ def _read_options(r, raw, mech) -> dict[str, str]:
     return options
 
 
-#: constraint keys owned by other modules (e.g. the driveline), kept as given in ``extra``.
-EXTRA_CONSTRAINT_KEYS: set[str] = {"max_speed_fraction_of_critical"}
-#: the section each of those keys needs; the section's object checks the value in its
-#: ``check_problem(problem)``.
-EXTRA_CONSTRAINT_SECTIONS: dict[str, str] = {"max_speed_fraction_of_critical": "driveline"}
-
-
-#: constraint keys every mechanism understands; a mechanism declares its own
-#: (``Mechanism.constraint_keys``, e.g. the four-bar's pin radius and Grashof)
-GENERAL_CONSTRAINT_KEYS = {"min_transmission_angle_deg", "assembly_margin"}
-
-
 def _read_constraints(r, raw, mech) -> Constraints:
     raw = r.mapping(raw, "constraints")
     own = GENERAL_CONSTRAINT_KEYS | set(mech.constraint_keys)
     r.known_keys(raw, "constraints", own | EXTRA_CONSTRAINT_KEYS)
-    kw = {}
-    if "min_transmission_angle_deg" in raw:
-        mu = r.number(raw["min_transmission_angle_deg"], "constraints.min_transmission_angle_deg")
-        if not 0 <= mu < 90:
-            raise r.error("constraints.min_transmission_angle_deg",
-                          f"must lie in [0, 90) degrees (got {mu:g})")
-        kw["min_transmission_angle_deg"] = mu
-    if "assembly_margin" in raw:
-        m = r.number(raw["assembly_margin"], "constraints.assembly_margin")
-        if not 0 <= m < 1:
-            raise r.error("constraints.assembly_margin", f"must lie in [0, 1) (got {m:g})")
-        kw["assembly_margin"] = m
+    kw = {k.name: k.read(r, raw[k.name], f"constraints.{k.name}") for k in CONSTRAINT_KEYS
+          if k.name in GENERAL_CONSTRAINT_KEYS and k.name in raw}
     kw |= mech.read_constraints({k: raw[k] for k in mech.constraint_keys if k in raw}, r)
     kw["extra"] = {k: v for k, v in raw.items() if k in EXTRA_CONSTRAINT_KEYS}
     return Constraints(**kw)
@@ -389,76 +509,44 @@ def _read_constraints(r, raw, mech) -> Constraints:
 
 def _read_objective(r, raw) -> Objective:
     raw = r.mapping(raw, "objective")
-    r.known_keys(raw, "objective", {"minimize", "ripple", "min_ratio", "max_ripple"})
-    kw = {}
-    if "minimize" in raw:
-        kw["minimize"] = r.text(raw["minimize"], "objective.minimize")
-        if kw["minimize"] not in OBJECTIVES:
-            raise r.error("objective.minimize", f"must be one of {', '.join(OBJECTIVES)} "
-                                                f"(got {kw['minimize']!r})")
+    r.known_keys(raw, "objective", names(OBJECTIVE_KEYS))
+    kw = {k.name: k.read(r, raw[k.name], f"objective.{k.name}") for k in OBJECTIVE_KEYS
+          if k.name in raw}
+    if "minimize" in kw:
         for key in OBJECTIVES[kw["minimize"]].requires:
             if key not in raw:
                 raise r.error(f"objective.{key}",
                               f"is required when minimize is {kw['minimize']}")
-    if "ripple" in raw:
-        kw["ripple"] = r.text(raw["ripple"], "objective.ripple")
-        if kw["ripple"] not in RIPPLE_DEFINITIONS:
-            raise r.error("objective.ripple", f"must be one of {', '.join(RIPPLE_DEFINITIONS)}"
-                                              f" (got {kw['ripple']!r})")
-    if "min_ratio" in raw:
-        kw["min_ratio"] = r.number(raw["min_ratio"], "objective.min_ratio")
-        if kw["min_ratio"] < 0:
-            raise r.error("objective.min_ratio", f"must not be negative (got {kw['min_ratio']:g})")
-    if "max_ripple" in raw:
-        kw["max_ripple"] = r.number(raw["max_ripple"], "objective.max_ripple", positive=True)
     return Objective(**kw)
 
 
 def _read_regulation(r, raw) -> tuple[float, ...]:
     raw = r.mapping(raw, "regulation")
-    r.known_keys(raw, "regulation", {"eccentricity"})
-    values = raw.get("eccentricity", [1.0])
+    r.known_keys(raw, "regulation", names(REGULATION_KEYS))
+    declared = REGULATION_KEYS[0]
+    values = raw.get("eccentricity", declared.default)
     if not isinstance(values, list) or not values:
         raise r.error("regulation.eccentricity", "must be a non-empty list of fractions in (0, 1]")
-    if len(values) > MAX_ECCENTRICITIES:
-        raise r.error("regulation.eccentricity", f"must list at most {MAX_ECCENTRICITIES} "
+    if len(values) > declared.max_items:
+        raise r.error("regulation.eccentricity", f"must list at most {declared.max_items} "
                                                  f"fractions (got {len(values)})")
     out = []
     for v in values:
         e = r.number(v, "regulation.eccentricity", positive=True)
-        if e > 1:
+        if e > declared.item.upper:
             raise r.error("regulation.eccentricity", f"fractions must lie in (0, 1] (got {e:g})")
-        if e < MIN_ECCENTRICITY:
+        if e < declared.item.lower:
             raise r.error("regulation.eccentricity", f"fractions must be at least "
-                                                     f"{MIN_ECCENTRICITY:g} (got {e:g})")
+                                                     f"{declared.item.lower:g} (got {e:g})")
         out.append(e)
     return tuple(out)
 
 
 def _read_solver(r, raw) -> SolverSettings:
     raw = r.mapping(raw, "solver")
-    r.known_keys(raw, "solver", {"samples", "starts", "agree", "smoothing", "seed",
-                                      "max_iter", "hessian", "peak_samples", "screen",
-                                      "basins", "workers"})
-    kw = {}
-    for key, (low, high) in SOLVER_INTEGERS.items():
-        if key in raw:
-            kw[key] = r.integer(raw[key], f"solver.{key}", low, high)
-    if "smoothing" in raw:
-        kw["smoothing"] = r.number(raw["smoothing"], "solver.smoothing", positive=True)
-        if kw["smoothing"] > SMOOTHING_MAX:
-            raise r.error("solver.smoothing", f"must be at most {SMOOTHING_MAX:g} "
-                                              f"(got {kw['smoothing']:g})")
-    if "peak_samples" in raw:
-        if not isinstance(raw["peak_samples"], bool):
-            raise r.error("solver.peak_samples", "must be true or false")
-        kw["peak_samples"] = raw["peak_samples"]
-    if "hessian" in raw:
-        kw["hessian"] = r.text(raw["hessian"], "solver.hessian")
-        if kw["hessian"] not in HESSIANS:
-            raise r.error("solver.hessian", f"must be one of {', '.join(HESSIANS)} "
-                                            f"(got {kw['hessian']!r})")
-    return SolverSettings(**kw)
+    r.known_keys(raw, "solver", names(SOLVER_KEYS))
+    return SolverSettings(**{k.name: k.read(r, raw[k.name], f"solver.{k.name}")
+                             for k in SOLVER_KEYS if k.name in raw})
 
 
 class Reader:
@@ -489,11 +577,17 @@ class Reader:
         return dict(value)
 
     def known_keys(self, value: Mapping, key: str, allowed: set[str]) -> None:
+        """Every key of ``value`` in ``allowed``; else the error names the key, suggests the
+        nearest known one (a misspelling, another case, ``min`` for ``lower``) and lists
+        them all."""
         for k in value:
             if k not in allowed:
+                hint = suggestion(k, allowed)
+                hint = f"did you mean {hint}? " if hint else ""
                 k = k if k.isprintable() and len(k) <= 40 else shown(k, 40)
                 path = f"{key}.{k}" if key else k
-                raise self.error(path, f"is not a known key; known: {', '.join(sorted(allowed))}")
+                raise self.error(path, f"is not a known key; {hint}known: "
+                                       f"{', '.join(sorted(allowed))}")
 
     def number(self, value, key, positive=False) -> float:
         """A finite float; unless zero, its magnitude within NUMBER_MAGNITUDE."""
@@ -535,3 +629,25 @@ class Reader:
         if len(value) > limit:
             raise self.error(key, f"must be at most {limit} characters (got {len(value)})")
         return value
+
+
+#: words meant for a known key that no spelling distance finds
+SYNONYMS = {"min": "lower", "max": "upper", "minimum": "lower", "maximum": "upper",
+            "low": "lower", "high": "upper", "lb": "lower", "ub": "upper", "from": "lower",
+            "to": "upper", "start": "initial", "init": "initial", "guess": "initial",
+            "x0": "initial", "values": "choices", "options": "choices"}
+
+
+def suggestion(key: str, allowed: set[str]) -> str | None:
+    """The known key ``key`` was most likely meant to be, or None: a synonym, the same key in
+    another case, or the closest spelling (:func:`difflib.get_close_matches`)."""
+    if len(key) > 100:
+        return None
+    folded = {a.lower(): a for a in allowed}
+    low = key.lower()
+    if SYNONYMS.get(low) in allowed:
+        return SYNONYMS[low]
+    if low in folded:
+        return folded[low]
+    close = difflib.get_close_matches(low, list(folded), n=1, cutoff=0.6)
+    return folded[close[0]] if close else None

@@ -27,12 +27,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..declarations import REQUIRED, Key, names
 from ..errors import ProblemError
 from . import model
 
-KEYS = {"length_mm", "A_mm", "C_mm", "outer_diameter_mm", "wall_mm", "youngs_modulus_gpa",
-        "density_kg_m3", "mass_per_length_kg_m", "EI_n_m2", "straightness_class", "y0_max_mm",
-        "balancing_speed_rad_s", "operating_speed_rad_s", "speed_factor"}
 TUBE_KEYS = ("outer_diameter_mm", "wall_mm", "youngs_modulus_gpa", "density_kg_m3")
 DIRECT_KEYS = ("mass_per_length_kg_m", "EI_n_m2")
 STEEL_YOUNGS_MODULUS_GPA = 210.0
@@ -43,6 +41,49 @@ G_MM_PER_KG_M = 1e6                       # 1 kg·m = 1e3 g × 1e3 mm
 #: thinnest wall, as a fraction of the outer diameter: below it D⁴ - d⁴ loses every digit
 MIN_WALL_FRACTION = 1e-6
 RPM_PER_RAD_S = 30.0 / np.pi
+
+_POSITIVE = {"lower": 0, "open_lower": True}
+#: the section's keys (docs/problem-file.md is generated from them); parse_section checks
+#: what they cannot say: the planes inside half the length, the wall at most half the
+#: diameter, the speeds below the critical speed
+DECLARATION = Key(
+    "driveline", "mapping", "the cardan shaft after the output (docs/driveline.md)",
+    default_text="none (no driveline figures)", keys=(
+        Key("length_mm", "number", "length l between the supports (joint centres)", unit="mm",
+            default=REQUIRED, example=1143, **_POSITIVE),
+        Key("A_mm", "number", "correction plane 1-1 from support I, below half of length_mm",
+            unit="mm", default=REQUIRED, example=80, lower=0),
+        Key("C_mm", "number", "correction plane 2-2 from support II, below half of length_mm",
+            unit="mm", default=REQUIRED, example=80, lower=0),
+        Key("outer_diameter_mm", "number", "outer diameter D of the tube", unit="mm",
+            default=REQUIRED, example=88.9, condition="unless mass_per_length_kg_m and "
+            "EI_n_m2 are given", **_POSITIVE),
+        Key("wall_mm", "number", "wall of the tube, at most D/2 and at least 1e-6 D", unit="mm",
+            default=REQUIRED, example=2.108, condition="unless mass_per_length_kg_m and "
+            "EI_n_m2 are given", **_POSITIVE),
+        Key("youngs_modulus_gpa", "number", "Young's modulus of the tube (steel)", unit="GPa",
+            default=STEEL_YOUNGS_MODULUS_GPA, **_POSITIVE),
+        Key("density_kg_m3", "number", "density of the tube (steel)", unit="kg/m³",
+            default=STEEL_DENSITY_KG_M3, **_POSITIVE),
+        Key("mass_per_length_kg_m", "number", "mass per length m', with EI_n_m2",
+            unit="kg/m", example=4.5, condition="instead of the four tube keys", **_POSITIVE),
+        Key("EI_n_m2", "number", "bending stiffness EI, with mass_per_length_kg_m",
+            unit="N·m²", example=1.12e5, condition="instead of the four tube keys",
+            **_POSITIVE),
+        Key("straightness_class", "choice", "straightness class of the tube (GOST 5005-82): "
+            "initial bend 0.4, 0.25 or 0.15 mm per metre", default=DEFAULT_STRAIGHTNESS_CLASS,
+            choices=tuple(model.GOST_5005_STRAIGHTNESS_MM_PER_M)),
+        Key("y0_max_mm", "number", "initial bend at mid-span, given directly", unit="mm",
+            example=0.3, condition="instead of straightness_class", **_POSITIVE),
+        Key("balancing_speed_rad_s", "number", "speed of the balancing machine (0: balanced "
+            "at low speed)", unit="rad/s", default=0.0, lower=0),
+        Key("operating_speed_rad_s", "number", "the shaft's speed, fixed", unit="rad/s",
+            default_text="speed_factor × the design's maximum output speed", example=600,
+            condition="instead of speed_factor", **_POSITIVE),
+        Key("speed_factor", "number", "shaft speed / the variator's output speed (a gear "
+            "between them)", unit="-", default=1.0, **_POSITIVE),
+    ))
+KEYS = names(DECLARATION.keys)
 
 
 @dataclass(frozen=True)
@@ -158,10 +199,12 @@ class DrivelineSection:
             out["operating_speed_rad_s"] = None
             return out
         out.update(self.figures(omega))
+        out["critical_margin_rad_s"] = out["critical_speed_rad_s"] - omega
         fraction = problem.constraints.extra.get(CONSTRAINT_KEY)
         if fraction is not None:
             out[CONSTRAINT_KEY] = float(fraction)
             out["speed_limit_rad_s"] = float(fraction) * out["critical_speed_rad_s"]
+            out["speed_margin_rad_s"] = out["speed_limit_rad_s"] - omega
             out["speed_constraint_holds"] = bool(omega <= out["speed_limit_rad_s"])
         return out
 
@@ -270,7 +313,8 @@ def parse_section(raw, reader) -> DrivelineSection:
     except (OverflowError, ZeroDivisionError):
         raise reader.error("", "describes a shaft whose figures overflow double precision; "
                                "check the units") from None
-    balancing = optional("balancing_speed_rad_s", 0.0, positive=False)
+    balancing = optional("balancing_speed_rad_s",
+                         DECLARATION.key("balancing_speed_rad_s").default, positive=False)
     if balancing < 0:
         raise reader.error("balancing_speed_rad_s", f"must not be negative (got {balancing:g})")
     operating = optional("operating_speed_rad_s", None)
@@ -280,7 +324,7 @@ def parse_section(raw, reader) -> DrivelineSection:
                                     f"(got {omega:g})")
     if "speed_factor" in raw and operating is not None:
         raise reader.error("speed_factor", "applies only when operating_speed_rad_s is not given")
-    factor = optional("speed_factor", 1.0)
+    factor = optional("speed_factor", DECLARATION.key("speed_factor").default)
     return DrivelineSection(length=length * 1e-3, A=planes["A_mm"] * 1e-3,
                             C=planes["C_mm"] * 1e-3, mass_per_length=mass_per_length, EI=EI,
                             y0_max=y0_max, y0_source=y0_source, balancing_speed=balancing,

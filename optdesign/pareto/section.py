@@ -15,9 +15,27 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-KEYS = {"points", "ratio_lower", "ratio_upper", "counts"}
+from ..declarations import Key, names
+
 DEFAULT_POINTS = 12
 MAX_POINTS = 1000
+
+#: the section's keys (docs/problem-file.md is generated from them)
+DECLARATION = Key(
+    "pareto", "mapping", "sweep settings of optdesign pareto (docs/pareto.md)",
+    default_text="every default", nullable=True, keys=(
+        Key("points", "integer", "ε values per phase count, both ends included (--points "
+            "overrides it)", default=DEFAULT_POINTS, lower=2, upper=MAX_POINTS),
+        Key("ratio_lower", "number", "sweep ε from this ratio", unit="-", lower=0,
+            open_lower=True, default_text="the least-ripple design's ratio", example=0.5),
+        Key("ratio_upper", "number", "... to this ratio (must exceed ratio_lower)", unit="-",
+            lower=0, open_lower=True, default_text="the largest ratio the linkage reaches",
+            example=0.8),
+        Key("counts", "list", "phase counts to sweep", item=Key("counts", "integer",
+            "a phase count", lower=1), min_items=1, default_text="every admissible count",
+            example=[6], condition="each one the design admits"),
+    ))
+KEYS = names(DECLARATION.keys)
 
 
 @dataclass(frozen=True)
@@ -46,13 +64,9 @@ def parse_section(raw, reader) -> ParetoSection:
     raw = reader.mapping({} if raw is None else raw, "")
     reader.known_keys(raw, "", KEYS)
     kw = {"source": reader.where}
-    if "points" in raw:
-        kw["points"] = reader.integer(raw["points"], "points", 2)
-        if kw["points"] > MAX_POINTS:
-            raise reader.error("points", f"must be at most {MAX_POINTS} (got {kw['points']})")
-    for key in ("ratio_lower", "ratio_upper"):
+    for key in ("points", "ratio_lower", "ratio_upper"):
         if key in raw:
-            kw[key] = reader.number(raw[key], key, positive=True)
+            kw[key] = DECLARATION.key(key).read(reader, raw[key], key)
     if "ratio_lower" in kw and "ratio_upper" in kw and kw["ratio_upper"] <= kw["ratio_lower"]:
         raise reader.error("ratio_upper", f"must exceed ratio_lower (got {kw['ratio_upper']:g}"
                                           f" <= {kw['ratio_lower']:g})")

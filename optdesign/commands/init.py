@@ -1,0 +1,56 @@
+"""``optdesign init [--mechanism NAME] [--out FILE] [--force]``: a starting problem file."""
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("init", help="write a starting problem file: every key, the optional "
+                                    "ones commented out at their defaults")
+    p.add_argument("--mechanism", default="fourbar_converter",
+                   help="the mechanism (default fourbar_converter; an unknown name lists "
+                        "the known ones)")
+    p.add_argument("--out", help="the file to write (default: print it)")
+    p.add_argument("--force", action="store_true", help="overwrite an existing --out file")
+    p.set_defaults(run=run)
+
+
+def run(args) -> int:
+    from ..errors import UsageError, shown
+    from ..mechanisms import known
+    from ..starter import STARTERS, starter_text
+
+    if args.mechanism not in known():
+        raise UsageError(f"--mechanism: unknown mechanism {shown(args.mechanism)}; known: "
+                         f"{', '.join(known())}")
+    if args.mechanism not in STARTERS:
+        raise UsageError(f"--mechanism: no starting design is known for {args.mechanism}")
+    if args.out is None:
+        print(starter_text(args.mechanism), end="")
+        return 0
+    path = _checked_out(Path(args.out), args.force)
+    from ..io import atomic_write_text
+
+    from ..problem import name_from_stem
+
+    atomic_write_text(path, starter_text(args.mechanism, name=name_from_stem(path.stem)))
+    print(f"wrote {path}")
+    return 0
+
+
+def _checked_out(path: Path, force: bool) -> Path:
+    """``path`` if init may write it: not a folder, in a folder that exists, and new (or
+    ``force``)."""
+    from ..errors import UsageError, shown
+
+    label = f"--out {shown(str(path))}"
+    if not str(path) or "\0" in str(path):
+        raise UsageError(f"{label}: is not a file name")
+    if path.is_dir():
+        raise UsageError(f"{label}: is a folder; give a file name such as my.yaml")
+    if path.exists() and not force:
+        raise UsageError(f"{label}: exists; init never overwrites a file (--force does)")
+    if not path.parent.is_dir():
+        raise UsageError(f"{label}: the folder {shown(str(path.parent))} does not exist")
+    return path
+

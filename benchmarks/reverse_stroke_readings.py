@@ -159,8 +159,8 @@ def exact_model() -> None:
     for layout in ("collinear", "text"):
         d = Design("fourbar_converter", values, {"pin_layout": layout})
         f, r = (exact_figures(d, s, W1)[0] for s in ("forward", "reverse"))
-        print(row(f"pin_layout={layout}", (f.omega_max, f.omega_min, f.omega_avg, f.delta),
-                  (r.omega_max, r.omega_min, r.omega_avg, r.delta)))
+        print(row(f"pin_layout={layout}", (f.omega_max, f.omega_min, f.omega_midrange, f.delta),
+                  (r.omega_max, r.omega_min, r.omega_midrange, r.delta)))
         print(row(f"pin_layout={layout}, ω_avg = time mean",
                   (f.omega_max, f.omega_min, f.omega_mean, f.delta_mean),
                   (r.omega_max, r.omega_min, r.omega_mean, r.delta_mean)))

@@ -99,22 +99,26 @@ def _timed(fn, min_time: float = 0.05, max_repeats: int = 50):
 
 
 # --------------------------------------------------------------------------- evaluators
-def sampled_rows(design, stroke, input_speed, ref: Reference, samples=SAMPLED_N, e=1.0):
+def sampled_rows(design, stroke, input_speed, ref: Reference, samples=SAMPLED_N, e=1.0,
+                 progress=None):
     rows = []
     for n in samples:
         fig, t = _timed(lambda: chunked_sampled_figures(design, stroke, input_speed, n, e)
                         if n > 65536 else sampled_figures(design, stroke, input_speed, n, e))
         rows.append({"method": "sampled", "samples": n, "smoothing": None, "time_s": t,
                      **_errors(fig, ref.figures)})
+        _tick(progress)
     return rows
 
 
-def exact_rows(design, stroke, input_speed, ref: Reference, grids=EXACT_GRID, e=1.0):
+def exact_rows(design, stroke, input_speed, ref: Reference, grids=EXACT_GRID, e=1.0,
+               progress=None):
     rows = []
     for n in grids:
         fig, t = _timed(lambda: exact_figures(design, stroke, input_speed, e, n_grid=n)[0])
         rows.append({"method": "exact", "samples": n, "smoothing": None, "time_s": t,
                      **_errors(fig, ref.figures)})
+        _tick(progress)
     return rows
 
 
@@ -130,13 +134,14 @@ def lse_figures(design, stroke, input_speed, n_samples, rho, e=1.0) -> StrokeFig
 
 
 def lse_rows(design, stroke, input_speed, ref: Reference, samples=SURROGATE_N,
-             smoothings=SMOOTHING, e=1.0):
+             smoothings=SMOOTHING, e=1.0, progress=None):
     rows = []
     for rho in smoothings:
         for n in samples:
             fig, t = _timed(lambda: lse_figures(design, stroke, input_speed, n, rho, e))
             rows.append({"method": "lse", "samples": n, "smoothing": rho, "time_s": t,
                          **_errors(fig, ref.figures)})
+            _tick(progress)
     return rows
 
 
@@ -177,7 +182,8 @@ def surrogate_figures(problem, values, samples: int, smoothing: float):
     return fig, t_solve, t_eval, status
 
 
-def surrogate_rows(problem, values, ref: Reference, samples=SURROGATE_N, smoothings=SMOOTHING):
+def surrogate_rows(problem, values, ref: Reference, samples=SURROGATE_N, smoothings=SMOOTHING,
+                   progress=None):
     rows = []
     for rho in smoothings:
         for n in samples:
@@ -185,10 +191,11 @@ def surrogate_rows(problem, values, ref: Reference, samples=SURROGATE_N, smoothi
             rows.append({"method": "surrogate", "samples": n, "smoothing": rho,
                          "time_s": t_solve, "eval_time_s": t_eval, "ipopt_status": status,
                          **_errors(fig, ref.figures)})
+            _tick(progress)
     return rows
 
 
-def solve_rows(problem, settings=SOLVE_SETTINGS, reference=SOLVE_REFERENCE):
+def solve_rows(problem, settings=SOLVE_SETTINGS, reference=SOLVE_REFERENCE, progress=None):
     """Full solves of ``problem`` at several (samples, smoothing), ``reference`` (the tightest)
     first: run time, and each verified optimum's δ and ratio against the best of them."""
     from .solve import solve, verify
@@ -199,6 +206,7 @@ def solve_rows(problem, settings=SOLVE_SETTINGS, reference=SOLVE_REFERENCE):
         r = solve(p)
         ok = r.status == "optimal" and verify(p, r.design).feasible
         runs.append((n, rho, r, ok))
+        _tick(progress)
     # Reference: the best verified optimum of every setting (the tightest one included): a
     # multistart may stop at a slightly worse local optimum, whatever its sampling.
     verified = [r for _, _, r, ok in runs if ok]
@@ -219,23 +227,58 @@ def solve_rows(problem, settings=SOLVE_SETTINGS, reference=SOLVE_REFERENCE):
     return rows
 
 
+def _settings(quick: bool, e: float, solve: bool) -> dict:
+    """What the benchmark evaluates: {part: its settings}, in the order it runs them."""
+    parts = {"sampled": SAMPLED_N[:-2] if quick else SAMPLED_N,
+             "exact": (8, 64, DEFAULT_GRID) if quick else EXACT_GRID}
+    if e == 1.0:
+        parts["surrogate_samples"] = (45, 90) if quick else SURROGATE_N
+        parts["surrogate_smoothing"] = (200.0,) if quick else SMOOTHING
+    if solve:
+        parts["solve"] = (SOLVE_REFERENCE,) + (SOLVE_QUICK if quick else SOLVE_SETTINGS)
+    return parts
+
+
+def evaluation_count(e: float = 1.0, quick: bool = False, solve: bool = False) -> int:
+    """How many evaluations :func:`accuracy_rows` reports to its ``progress``: the reference,
+    one per sampled and exact setting, per (samples, ρ) of the log-sum-exp formulation and of
+    the surrogate, and one per full solve."""
+    parts = _settings(quick, e, solve)
+    n = 1 + len(parts["sampled"]) + len(parts["exact"]) + len(parts.get("solve", ()))
+    if e == 1.0:
+        n += len(parts["surrogate_samples"]) * (len(SMOOTHING)
+                                                + len(parts["surrogate_smoothing"]))
+    return n
+
+
+def _tick(progress) -> None:
+    if progress is not None:
+        progress(1)
+
+
 def accuracy_rows(problem, values=None, e: float = 1.0, crosscheck_samples: int = 0,
-                  solve_problem=None, quick: bool = False) -> tuple[list[dict], Reference]:
-    """Every row of the benchmark for the problem's design (at its fixed / initial values)."""
+                  solve_problem=None, quick: bool = False,
+                  progress=None) -> tuple[list[dict], Reference]:
+    """Every row of the benchmark for the problem's design (at its fixed / initial values).
+
+    ``progress``, if given, is called with 1 after each of the :func:`evaluation_count`
+    evaluations (e.g. a tqdm bar's ``update``).
+    """
     design = Design.from_problem(problem, values)
     design.check_assembly(e)
     args = (design, problem.stroke, problem.input_speed)
+    parts = _settings(quick, e, solve_problem is not None)
     ref = reference_figures(*args, e, crosscheck_samples)
-    sampled = SAMPLED_N[:-2] if quick else SAMPLED_N
-    grids = (8, 64, DEFAULT_GRID) if quick else EXACT_GRID
-    rows = sampled_rows(*args, ref, sampled, e) + exact_rows(*args, ref, grids, e)
+    _tick(progress)
+    rows = sampled_rows(*args, ref, parts["sampled"], e, progress) + \
+        exact_rows(*args, ref, parts["exact"], e, progress)
     if e == 1.0:
-        nsur = (45, 90) if quick else SURROGATE_N
-        rows += lse_rows(*args, ref, nsur)
+        nsur = parts["surrogate_samples"]
+        rows += lse_rows(*args, ref, nsur, progress=progress)
         rows += surrogate_rows(problem, dict(design.values), ref, nsur,
-                               (200.0,) if quick else SMOOTHING)
+                               parts["surrogate_smoothing"], progress)
     if solve_problem is not None:
-        rows += solve_rows(solve_problem, SOLVE_QUICK if quick else SOLVE_SETTINGS)
+        rows += solve_rows(solve_problem, parts["solve"][1:], progress=progress)
     return rows, ref
 
 
@@ -268,10 +311,14 @@ def _sci(v) -> str:
 
 
 def plot_accuracy(rows: list[dict], ax=None, title: str | None = None):
-    """δ error against run time, log-log, one line per method (and per ρ); returns the figure."""
-    from .plots import pyplot
+    """δ error against run time, log-log, one line per method (and per ρ); returns the figure.
+
+    Points are labelled with their sample count where the label overlaps no other label or
+    marker: each line's smallest and largest count first, then the others while room is left.
+    """
+    from .plots import place_labels, pyplot
     plt = pyplot()
-    fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(figsize=(8, 5.2))
+    fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(figsize=(8.5, 5.6))
     floor = 1e-16
     groups: dict[tuple, list[dict]] = {}
     for r in rows:
@@ -281,27 +328,36 @@ def plot_accuracy(rows: list[dict], ax=None, title: str | None = None):
         groups.setdefault(key, []).append(r)
     styles = {"sampled": ("o", "-"), "exact": ("s", "-"), "surrogate": ("^", "--"),
               "lse": ("v", ":"), "solve": ("D", "")}
+    labels = []                     # (priority, (x, y), text, colour)
     for (method, rho), rs in groups.items():
         rs = sorted(rs, key=lambda r: r["time_s"])
         marker, ls = styles.get(method, ("x", "-"))
-        label = _label(method, rho)
         t = [r["time_s"] for r in rs]
         err = [max(r["delta_error"], floor) for r in rs]
-        ax.plot(t, err, marker=marker, ls=ls or "none", label=label, ms=5)
+        line, = ax.plot(t, err, marker=marker, ls=ls or "none", label=_label(method, rho),
+                        ms=5)
         if method in ("sampled", "exact", "surrogate", "solve"):
-            for r, x, y in zip(rs, t, err):
+            counts = [r["samples"] for r in rs]
+            ends = {counts.index(min(counts)), counts.index(max(counts))}
+            for j, (r, x, y) in enumerate(zip(rs, t, err)):
                 text = str(r["samples"]) if method != "solve" else \
                     f"N={r['samples']}, ρ={r['smoothing']:g}"
-                ax.annotate(text, (x, y), fontsize=6.5, alpha=0.75,
-                            xytext=(3, 3), textcoords="offset points")
+                labels.append((0 if j in ends else 1, (x, y), text, line.get_color()))
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("run time per evaluation (per solve for full solves) [s]")
     ax.set_ylabel("|δ - δ_reference|  (errors below 1e-16 drawn at 1e-16)")
     ax.set_title(title or "Ripple error against run time")
     ax.grid(True, which="major", alpha=0.35)
-    ax.legend(fontsize=7.5, loc="best")
+    ax.legend(fontsize=7.5, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False,
+              title="method (labels: samples N)", title_fontsize=8)
     fig.tight_layout()
+    if labels:
+        labels.sort(key=lambda item: item[0])
+        markers = np.array([xy for line in ax.get_lines() for xy in line.get_xydata()])
+        place_labels(ax, [xy for _, xy, _, _ in labels], [t for _, _, t, _ in labels],
+                     colors=[c for _, _, _, c in labels], avoid=markers, force=False,
+                     fontsize=7, distance=4)
     return fig
 
 

@@ -62,7 +62,8 @@ class AnalysisResult(Tabular):
             out["failure"] = self.failure
         out["constraints"] = self.constraints
         out.update(self.sections)
-        return out
+        from .units import design_units, stamped
+        return stamped(out, design_units(self.mechanism))
 
 
 def transmission_angles(design: Design, eccentricity: float = 1.0,
@@ -131,8 +132,13 @@ def check_constraints(problem, values: dict) -> list[dict]:
 
 def format_analysis(result: AnalysisResult, name: str = "") -> str:
     """A readable table of an analysis, for the terminal."""
+    from .units import design_units, gear_ratio_text
+
+    units = design_units(result.mechanism)
     lines = [f"{name or result.mechanism}: {result.mechanism}, ω1 = {result.input_speed:g} rad/s"]
-    lines.append("design: " + ", ".join(f"{k} = {v:g}" for k, v in result.design.items()))
+    lines.append("design: " + ", ".join(
+        f"{k} = {v:g}" + (f" {units[k]}" if units.get(k, "-") != "-" else "")
+        for k, v in result.design.items()))
     if not result.assembles:
         lines.append(f"does NOT assemble: {result.failure['message']}")
         return "\n".join(lines)
@@ -141,12 +147,18 @@ def format_analysis(result: AnalysisResult, name: str = "") -> str:
     for row in result.regulation:
         lines.append("")
         lines.append(f"eccentricity {row['eccentricity']:g}:")
-        lines.append(f"  {'stroke':<8} {'ω_max':>8} {'ω_min':>8} {'ω_avg':>8} {'ω_mean':>8} "
-                     f"{'δ':>7} {'δ_mean':>7} {'ratio':>7}")
+        lines.append(f"  {'stroke':<8} {'ω_max':>8} {'ω_min':>8} {'ω_mid':>8} {'ω_mean':>8} "
+                     f"{'δ':>7} {'δ_mean':>7} {'ratio':>7} {'i=1/ratio':>9}")
         for stroke, f in row["strokes"].items():
             lines.append(f"  {stroke:<8} {f['omega_max']:8.3f} {f['omega_min']:8.3f} "
-                         f"{f['omega_avg']:8.3f} {f['omega_mean']:8.3f} {f['delta']:7.4f} "
-                         f"{f['delta_mean']:7.4f} {f['ratio']:7.4f}")
+                         f"{f['omega_midrange']:8.3f} {f['omega_mean']:8.3f} {f['delta']:7.4f} "
+                         f"{f['delta_mean']:7.4f} {f['ratio']:7.4f} "
+                         f"{gear_ratio_text(f['ratio']):>9}")
+    if result.regulation:
+        lines.append("  speeds in rad/s; ω_mid the midrange (ω_max + ω_min)/2, ω_mean the time "
+                     "mean;")
+        lines.append("  ratio = output speed / input speed; the gear ratio i = n_in/n_out is "
+                     "1/ratio")
     if result.constraints:
         lines.append("")
         lines.append("constraints of the problem file:")

@@ -7,6 +7,15 @@ import os
 import tempfile
 from pathlib import Path
 
+#: The layout version of every JSON document the package writes or prints: its
+#: ``schema_version`` key, beside a ``units`` block (:func:`optdesign.units.stamped`;
+#: docs/contract.md, "Schema version and units"). Bump the minor part ("1.1" -> "1.2") when
+#: keys are added or one is deprecated (its alias kept beside the new name): a reader of the
+#: old layout keeps working. Bump the major part ("1.x" -> "2.0") when a key is removed,
+#: renamed without an alias, or changes its meaning or unit. Documents without the key are
+#: "1.0" (before 1.1 added ``schema_version``, ``units`` and ``omega_midrange``).
+SCHEMA_VERSION = "1.1"
+
 
 def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
     """Write to a temporary file in the same folder, fsync, then rename over ``path``."""

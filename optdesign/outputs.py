@@ -13,7 +13,7 @@ from .io import atomic_savefig, atomic_write_bytes, atomic_write_json, atomic_wr
 #: every file ``solve`` may leave in its folder (the set :mod:`optdesign.output_dir` replaces)
 SOLVE_FILES = ("result.json", "summary.txt", "speeds.png", "mechanism.png")
 #: every file ``pareto`` may leave in its folder (the set a fresh sweep clears)
-PARETO_FILES = ("points.jsonl", "pareto.csv", "pareto.json", "fronts.png",
+PARETO_FILES = ("points.jsonl", "pareto.csv", "pareto.json", "fronts.png", "lengths.png",
                 "knee_mechanism.png", "knee_speeds.png", "report.md", "report.html")
 
 
@@ -59,9 +59,11 @@ def write_front(result, out_dir: str | Path) -> list[Path]:
 
 def write_report(result, problem, out_dir, problem_path=None,
                  command: str | None = None) -> list[Path]:
-    """fronts.png, knee_mechanism.png, knee_speeds.png, report.md and report.html."""
+    """fronts.png, lengths.png, knee_mechanism.png, knee_speeds.png, report.md and
+    report.html."""
     from .design import Design
-    from .pareto.report import blocks, plot_fronts, render_html, render_md, run_info
+    from .pareto.report import (blocks, plot_fronts, plot_lengths, render_html, render_md,
+                                run_info)
     from .plots import plot_mechanism, plot_speeds
 
     out = Path(out_dir)
@@ -70,6 +72,13 @@ def write_report(result, problem, out_dir, problem_path=None,
     points.attrs["knee"] = result.indicators.get("knee")
     images["fronts.png"] = save_figure(
         plot_fronts(points, title=f"{problem.name}: ripple against ratio"), out / "fronts.png")
+    free = problem.free_lengths()
+    if free:
+        images["lengths.png"] = save_figure(
+            plot_lengths(points, {k: (problem.design[k].lower, problem.design[k].upper)
+                                  for k in free},
+                         title=f"{problem.name}: free lengths along the front"),
+            out / "lengths.png")
     knee = result.knee
     if knee is not None:
         values = {k: float(knee[k]) for k in problem.model.lengths}

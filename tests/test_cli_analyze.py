@@ -16,7 +16,8 @@ def test_analyze_json_contract(capsys):
     out = json.loads(capsys.readouterr().out)
     assert out["assembles"] is True
     assert set(out["strokes"]) == {"forward", "reverse"}
-    keys = {"omega_max", "omega_min", "omega_avg", "omega_mean", "delta", "delta_mean", "ratio"}
+    keys = {"omega_max", "omega_min", "omega_midrange", "omega_avg", "omega_mean", "delta",
+            "delta_mean", "ratio"}
     for stroke in out["strokes"].values():
         assert keys <= set(stroke)
     fwd = out["strokes"]["forward"]

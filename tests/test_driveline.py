@@ -466,7 +466,8 @@ def test_driveline_command_writes_the_figure(tmp_path, capsys):
     png = tmp_path / "driveline.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert [p.name for p in tmp_path.iterdir()] == ["driveline.png"]    # no temp file left
-    assert capsys.readouterr().out == f"wrote {png}\n"
+    out = capsys.readouterr().out
+    assert "ω_cr = 1191.46 rad/s" in out and out.endswith(f"wrote {png}\n")
 
 
 def test_driveline_command_needs_the_section(capsys):

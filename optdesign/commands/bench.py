@@ -27,12 +27,17 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..accuracy import accuracy_rows, format_table
+    import sys
+
+    from tqdm import tqdm
+
+    from ..accuracy import accuracy_rows, evaluation_count, format_table
     from ..errors import ProblemError, UsageError
     from ..io import json_text
     from ..output_checks import prepare_out
     from ..outputs import write_accuracy
     from ..problem import load_problem
+    from ..units import stamped
 
     problem = load_problem(args.problem)
     if args.crosscheck < 0:
@@ -44,10 +49,16 @@ def run(args) -> int:
     if solve_problem is not None and not solve_problem.free_lengths():
         raise ProblemError(f"{solve_problem.source}: --solve needs a problem with free lengths")
     out = prepare_out(args.out, problem.name, files=("accuracy.json", "accuracy.png"))
-    rows, ref = accuracy_rows(problem, crosscheck_samples=args.crosscheck,
-                              solve_problem=solve_problem, quick=args.quick)
-    payload = {"problem": problem.name, "reference": {"method": ref.method,
-               **ref.figures.to_dict(), "crosscheck": ref.crosscheck}, "rows": rows}
+    # a bar on stderr over the evaluations, silent when stderr is not a terminal
+    total = evaluation_count(quick=args.quick, solve=solve_problem is not None)
+    with tqdm(total=total, desc="evaluations", unit="eval", file=sys.stderr, disable=None,
+              leave=False) as bar:
+        rows, ref = accuracy_rows(problem, crosscheck_samples=args.crosscheck,
+                                  solve_problem=solve_problem, quick=args.quick,
+                                  progress=bar.update)
+    payload = stamped({"problem": problem.name, "reference": {
+        "method": ref.method, **ref.figures.to_dict(), "crosscheck": ref.crosscheck},
+        "rows": rows})
     files = write_accuracy(payload, rows, problem, out, plot=not args.no_plot)
     if args.json:
         print(json_text(payload))

@@ -1,17 +1,26 @@
-"""``optdesign driveline PROBLEM.yaml [--out DIR]``: the shaft's figure, DIR/driveline.png."""
+"""``optdesign driveline PROBLEM.yaml [--out DIR] [--json]``: the shaft's figures in the
+terminal (critical speed, margins, the speed check's verdict) and its figure, DIR/driveline.png.
+
+Exit 0 whatever the verdict (it is printed, and is ``verdict`` in the JSON); 1 when the design
+does not assemble (the shaft's own figures are still printed and drawn).
+"""
 from __future__ import annotations
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("driveline", help="plot the cardan shaft's bend and imbalance "
-                                         "against its speed (needs a driveline: section)")
+    p = sub.add_parser("driveline", help="the cardan shaft's critical speed, margins and speed "
+                                         "check, and a plot of its bend and imbalance against "
+                                         "its speed (needs a driveline: section)")
     p.add_argument("problem", help="problem file (YAML) with a driveline: section")
     p.add_argument("--out", help="output directory (default results/NAME/)")
+    p.add_argument("--json", action="store_true", help="print the figures as JSON")
     p.set_defaults(run=run)
 
 
 def run(args) -> int:
     from ..analysis import analyze
+    from ..driveline.report import driveline_report, format_driveline
+    from ..io import json_text
     from ..output_checks import prepare_out
     from ..outputs import write_driveline
     from ..problem import load_problem
@@ -20,9 +29,13 @@ def run(args) -> int:
     section = problem.require_section("driveline")
     out = prepare_out(args.out, problem.name, files=("driveline.png",))
     result = analyze(problem)
-    figures = result.sections["driveline"]
     path = out / "driveline.png"
-    write_driveline(section, path, operating_speed=figures.get("operating_speed_rad_s"),
-                 speed_limit=figures.get("speed_limit_rad_s"))
-    print(f"wrote {path}")
-    return 0
+    report = driveline_report(problem, result, figure=str(path))
+    write_driveline(section, path, operating_speed=report.get("operating_speed_rad_s"),
+                    speed_limit=report.get("speed_limit_rad_s"))
+    if args.json:
+        print(json_text(report))
+    else:
+        print(format_driveline(report))
+        print(f"wrote {path}")
+    return 0 if result.assembles else 1

@@ -91,12 +91,23 @@ class ParetoResult(Tabular):
         return f"<p><b>{html.escape(self.summary())}</b></p>\n{table}"
 
     def to_dict(self) -> dict:
+        """pareto.json: the run, the indicators, the knee, every point and the raw ends, then
+        ``schema_version`` and ``units``, which also give the unit of every pareto.csv
+        column (the design columns in mm)."""
+        from ..units import stamped
+
         df = self.points.replace({np.nan: None})
-        return {"run": self.run, "indicators": self.indicators,
-                "per_count": {str(k): v for k, v in self.per_count.items()},
-                "knee": None if self.knee is None else _plain(self.knee.to_dict()),
-                "points": [_plain(r) for r in df.to_dict(orient="records")],
-                "ends": self.ends}
+        lengths = [c for c in self.points.columns if c not in LEAD + TAIL + ["index"]]
+        # a design holds the lengths and the count ("phases" here, "sections" in an end's
+        # design of the slotted lever)
+        counts = {k for end in self.ends for k in (end.get("design") or {})} - set(lengths)
+        return stamped({"run": self.run, "indicators": self.indicators,
+                        "per_count": {str(k): v for k, v in self.per_count.items()},
+                        "knee": None if self.knee is None else _plain(self.knee.to_dict()),
+                        "points": [_plain(r) for r in df.to_dict(orient="records")],
+                        "ends": self.ends},
+                       {"phases": "- (count)"} | {k: "- (count)" for k in counts}
+                       | {k: "mm" for k in lengths})
 
 
 def _plain(row: dict) -> dict:

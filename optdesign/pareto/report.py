@@ -12,6 +12,8 @@ import platform
 from datetime import datetime, timezone
 from pathlib import Path
 
+import numpy as np
+
 from .indicators import REFERENCE
 
 MARKERS = "osD^v<>p*h"
@@ -39,11 +41,61 @@ def plot_fronts(points, ax=None, title: str | None = None):
         k = points.loc[points.attrs["knee"]]
         ax.plot(k["ratio"], k["delta"], "*", ms=16, color="crimson", mec="black",
                 label=f"knee (n = {int(k['phases'])})")
-    ax.set_xlabel("ratio i = mean output speed / ω1 (at e = 1)")
+    ax.set_xlabel("ratio = mean output speed / ω1 (at e = 1; gear ratio i = 1/ratio)")
     ax.set_ylabel("ripple δ (exact)")
     ax.set_title(title or "ripple against ratio, per phase count")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
+    return fig
+
+
+def plot_lengths(points, bounds: dict, axes=None, title: str | None = None):
+    """Each free length of every phase count's front against the ratio, one panel per
+    length, with the length's lower and upper bounds as dashed lines (a front running along
+    one is held by that bound). ``bounds``: {length: (lower, upper)} in mm."""
+    from matplotlib.ticker import MaxNLocator
+
+    from ..plots import pyplot
+    plt = pyplot()
+    names = list(bounds)
+    if axes is None:
+        ncols = min(3, max(len(names), 1))
+        nrows = -(-len(names) // ncols)
+        fig, axes = plt.subplots(nrows, ncols, figsize=(4.3 * ncols, 3.3 * nrows + 0.6),
+                                 sharex=True, squeeze=False)
+        for ax in axes.ravel()[len(names):]:
+            ax.set_visible(False)
+    axes = list(np.atleast_1d(axes).ravel())
+    fig = axes[0].figure
+    ok = points[points["status"] == "optimal"]
+    knee = points.attrs.get("knee")
+    for ax, name in zip(axes, names):
+        for j, (n, g) in enumerate(ok.groupby("phases")):
+            front = g[g["count_front"]].sort_values("ratio")
+            ax.plot(front["ratio"], front[name], marker=MARKERS[j % len(MARKERS)], ms=4.5,
+                    lw=1.3, label=f"n = {n}")
+        if knee is not None:
+            k = points.loc[knee]
+            ax.plot(k["ratio"], k[name], "*", ms=13, color="crimson", mec="black", zorder=5,
+                    label="knee")
+        lower, upper = bounds[name]
+        for value, side in ((lower, "lower"), (upper, "upper")):
+            ax.axhline(value, color="0.3", ls="--", lw=1.0)
+            ax.annotate(f"{side} {value:g}", (1.0, value), xycoords=("axes fraction", "data"),
+                        xytext=(-3, 2 if side == "lower" else -2), textcoords="offset points",
+                        ha="right", va="bottom" if side == "lower" else "top", fontsize=7.5,
+                        color="0.3")
+        pad = 0.06 * (upper - lower)
+        ax.set_ylim(lower - pad, upper + pad)
+        ax.set_title(name, fontsize=10)
+        ax.set_ylabel(f"{name} [mm]")
+        ax.set_xlabel("ratio = output / input speed (at e = 1)")
+        ax.tick_params(axis="x", labelbottom=True)
+        ax.xaxis.set_major_locator(MaxNLocator(5))
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7.5, loc="best")
+    fig.suptitle(title or "free lengths along the front", fontsize=11)
+    fig.tight_layout()
     return fig
 
 
@@ -86,6 +138,12 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
                  f"re-evaluated by the exact evaluator.")]
     out.append(("h2", "Fronts"))
     out.append(("img", "fronts.png", images.get("fronts.png")))
+    if images.get("lengths.png") is not None:
+        out.append(("h2", "Lengths along the front"))
+        out.append(("p", "Each free length of every phase count's front against the ratio it "
+                         "reaches, between its bounds from the problem file (dashed): a front "
+                         "that runs along a bound is held there by it."))
+        out.append(("img", "lengths.png", images["lengths.png"]))
     out.append(("h2", "Indicators"))
     out.append(("p", "Objectives δ (minimised) and ratio (maximised), normalised so the ideal "
                      "point is (0, 0) and the nadir (1, 1) of the front judged; hypervolume "

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 def summary_text(result, problem) -> str:
     """A short plain-text account of a solve, for the terminal and summary.txt."""
+    from ..units import gear_ratio_text
+
     lines = [f"{problem.name}: {result.status} ({problem.mechanism}, {problem.stroke} stroke, "
              f"ω1 = {problem.input_speed:g} rad/s)"]
     if result.design:
@@ -13,8 +15,9 @@ def summary_text(result, problem) -> str:
                                             f"{k} = {v:g}" for k, v in result.design.items()))
         lines.append(f"δ ({problem.objective.ripple}, worst over e = "
                      f"{', '.join(f'{e:g}' for e in problem.eccentricities)}) = "
-                     f"{result.delta:.6f}; ratio = {result.ratio:.6f}; least transmission "
-                     f"angle = {result.min_transmission_angle_deg:.2f} deg")
+                     f"{result.delta:.6f}; ratio = {result.ratio:.6f} (output/input speed; "
+                     f"gear ratio i = 1/ratio = {gear_ratio_text(result.ratio)}); least "
+                     f"transmission angle = {result.min_transmission_angle_deg:.2f} deg")
         lines.append(binding_text(result.active, problem))
         lines += bound_warnings(result, problem)
     else:

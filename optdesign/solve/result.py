@@ -111,8 +111,12 @@ class SolveResult(Tabular):
         return pd.DataFrame(rows)
 
     def to_dict(self) -> dict:
+        """The contract's keys, then ``schema_version`` and ``units``
+        (:func:`optdesign.units.stamped`)."""
+        from ..units import design_units, stamped
+
         out = asdict(self)
         out["per_phase"] = [p.to_dict() for p in self.per_phase]
         sections = out.pop("sections")
         out.update(sections)
-        return out
+        return stamped(out, design_units(self.mechanism))

@@ -21,7 +21,7 @@ def test_paper_forward_stroke_table(paper_design):
     f, _ = exact_figures(paper_design, "forward", W1)
     assert f.omega_max == pytest.approx(39.8, abs=0.05)
     assert f.omega_min == pytest.approx(27.2, abs=0.05)
-    assert f.omega_avg == pytest.approx(33.5, abs=0.05)
+    assert f.omega_midrange == pytest.approx(33.5, abs=0.05)
     assert f.delta == pytest.approx(0.376, abs=0.0005)
 
 

@@ -55,10 +55,10 @@ def test_json_and_report_are_written(small_front, small_path):
     assert data["knee"]["phases"] == 4
     files = write_report(result, load_problem(small_path), out)
     names = {f.name for f in files}
-    assert {"fronts.png", "knee_mechanism.png", "knee_speeds.png", "report.md",
+    assert {"fronts.png", "lengths.png", "knee_mechanism.png", "knee_speeds.png", "report.md",
             "report.html"} <= names
     html = (out / "report.html").read_text()
-    assert html.count("data:image/png;base64,") == 3 and "<img" in html
+    assert html.count("data:image/png;base64,") == 4 and "<img" in html
     md = (out / "report.md").read_text()
     assert "casadi" in md and "hypervolume" in md and "![fronts.png](fronts.png)" in md
 

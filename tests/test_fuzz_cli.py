@@ -114,31 +114,35 @@ def _set(data, path, value):
     node[keys[-1]] = value
 
 
-def _drop(data, path):
+def _parent(data, path):
+    """(the mapping that holds the last key of ``path``, that key), or (None, key)."""
     node = data
     keys = path.split(".")
     for k in keys[:-1]:
         node = node.get(k)
         if not isinstance(node, dict):
-            return
-    node.pop(keys[-1], None)
+            return None, keys[-1]
+    return node, keys[-1]
+
+
+def _drop(data, path):
+    node, key = _parent(data, path)
+    if node is not None:
+        node.pop(key, None)
 
 
 def _scale(data, path, factor):
     """Multiply the number at ``path`` (or every number of a list or bounds there)."""
-    node = data
-    keys = path.split(".")
-    for k in keys[:-1]:
-        node = node.get(k)
-        if not isinstance(node, dict):
-            return
-    value = node.get(keys[-1])
+    node, key = _parent(data, path)
+    if node is None:
+        return
+    value = node.get(key)
     if isinstance(value, bool):
         return
     if isinstance(value, (int, float)):
-        node[keys[-1]] = value * factor
+        node[key] = value * factor
     elif isinstance(value, list):
-        node[keys[-1]] = [v * factor if isinstance(v, (int, float)) and not isinstance(v, bool)
+        node[key] = [v * factor if isinstance(v, (int, float)) and not isinstance(v, bool)
                           else v for v in value]
     elif isinstance(value, dict):
         for k in list(value):

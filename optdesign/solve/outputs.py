@@ -47,8 +47,21 @@ def binding_text(active: list[dict], problem) -> str:
 
 def bound_warnings(result, problem) -> list[str]:
     """A warning per free length the optimum rests on a bound of: the design would go past
-    it, so the bound shapes the result (is it a real limit, or a first guess?)."""
+    it, so the bound shapes the result (is it a real limit, or a first guess?); and one per
+    length constraint held at zero, where the linkage degenerates (a pin radius of 0 puts
+    every rod on the crank pin)."""
+    from ..criteria import LengthConstraint, constraints_of
+
+    criteria = {c.name: c for c in constraints_of(problem)}
     out = []
+    for a in result.active:
+        criterion = criteria.get(a["name"])
+        if isinstance(criterion, LengthConstraint):
+            lower, upper = criterion.bounds(problem)
+            if (lower if a["side"] == "lower" else upper) == 0:
+                out.append(f"warning: {a['name']} is held at 0 {a['unit']}: the linkage "
+                           f"degenerates there (a pin radius of 0 puts every rod on the crank "
+                           f"pin); give the constraint a real least value in the problem file")
     for a in result.active:
         if a["kind"] != "bound":
             continue

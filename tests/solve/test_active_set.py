@@ -51,3 +51,17 @@ def test_a_length_bound_sensitivity_matches_a_re_solve(disc):
         "l2": replace(problem.design["l2"], upper=problem.design["l2"].upper + step)})
     measured = (solve_phase(wider, 6, workers=1).delta - result.delta) / step
     assert reported == pytest.approx(measured, rel=0.05)
+
+
+def test_a_pin_radius_held_at_zero_and_a_length_on_its_bound_are_warned_of(disc):
+    """Without min_pin_radius the optimum puts every rod on the crank pin (l2 = l2'):
+    the summary says so, and names the lengths resting on a bound."""
+    from optdesign.solve.driver import solve
+    from optdesign.solve.outputs import summary_text
+
+    problem, _ = disc
+    loose = replace(problem, constraints=replace(problem.constraints, min_pin_radius=0.0),
+                    design=problem.design | {"l2": replace(problem.design["l2"], upper=300.0)})
+    text = summary_text(solve(loose), loose)
+    assert "warning: pin_radius is held at 0 mm" in text
+    assert "warning: l2 rests on its upper bound, 300 mm" in text

@@ -1,26 +1,55 @@
-"""Explicit against implicit integration of the drive over the freewheel stiffness.
+"""The drive dynamics over the freewheel stiffness: explicit against implicit, and the sweep.
 
     PYTHONPATH=. python benchmarks/dynamics_stiffness.py [--turns 2] [--inertia 1e-4]
         [--damping 0.1] [--methods Radau,BDF,RK45] [--stiffness 1e2,1e3,...]
+    PYTHONPATH=. python benchmarks/dynamics_stiffness.py --sweep [--jobs 2] [--quick]
+        [--problems fourbar,reducer] [--variants ratchet,composite,"constant crank"]
 
-Sharkov & Kalinin's six-phase four-bar converter (problems/sharkov2022.yaml) with the pulse
-reducer paper's motor and input inertia, a light output (I2) and a 20 N·m load, simulated for a
-fixed number of crank turns from the same start with each method at rtol 1e-8, atol 1e-10 rad.
-Prints one row per (stiffness, method): accepted steps, right-hand-side evaluations, Jacobians,
-LU factorisations, switches (engagements + releases), wall time, and the dynamic δ of the last
-turn (the methods must agree on it). The table of one run is recorded in docs/dynamics.md.
+Methods (the default): Sharkov & Kalinin's six-phase four-bar converter
+(problems/sharkov2022.yaml) with the pulse reducer paper's motor and input inertia, a light
+output (I2) and a 20 N·m load, simulated for a fixed number of crank turns from the same start
+with each method at rtol 1e-8, atol 1e-10 rad. Prints one row per (stiffness, method):
+accepted steps, right-hand-side evaluations, Jacobians, LU factorisations, switches, wall time,
+and the dynamic δ of the last turn (the methods must agree on it). docs/dynamics.md holds the
+table of one run.
+
+Sweep (``--sweep``): the promised range of ``optdesign simulate`` at the problem files' own
+settings (100 turns at most, rtol 1e-8, atol 1e-10): stiffness 1e2 … 1e8 N·m/rad per decade ×
+damping ratio {0, 0.1} × both dynamics problems × {Radau, BDF} × {ratchet freewheel and
+dynamic crank, ``--freewheel composite``, ``--crank constant``}, each run the real command in
+its own process. A run passes when it ends in exit 0 (steady) or exit 1 with one line on
+stderr, strict JSON on stdout (no NaN or Infinity) and the same ``reason`` in both, and no
+traceback. Writes benchmarks/results/dynamics_stiffness.{md,json} (a sweep of some problems or
+variants replaces their rows and keeps the others'); the README's dynamics table is its
+summary. ``--quick``: stiffness 1e2, 1e5, 1e8 only. tests/dynamics/
+test_stiffness_sweep.py runs the same grid reduced (two turns, rtol 1e-6) in ~40 s.
 """
 from __future__ import annotations
 
 import argparse
+import itertools
+import json
+import os
+import subprocess
+import sys
+import tempfile
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+PROBLEMS = {"fourbar": ROOT / "problems" / "sharkov2022_dynamics.yaml",
+            "reducer": ROOT / "problems" / "pulse_reducer_dynamics.yaml"}
+VARIANTS = {"ratchet": [], "composite": ["--freewheel", "composite"],
+            "constant crank": ["--crank", "constant"]}
+RESULTS = ROOT / "benchmarks" / "results"
 
 
+# ------------------------------------------------------------------ methods
 def problem(stiffness: float, inertia: float, damping: float, turns: int):
     from optdesign.problem import problem_from_dict
 
@@ -31,16 +60,9 @@ def problem(stiffness: float, inertia: float, damping: float, turns: int):
     return problem_from_dict(data, "benchmark.yaml")
 
 
-def main() -> None:
+def compare_methods(args) -> None:
     from optdesign.dynamics.steady import simulate
 
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--turns", type=int, default=2)
-    ap.add_argument("--inertia", type=float, default=1e-4, help="I2, kg·m²")
-    ap.add_argument("--damping", type=float, default=0.1, help="freewheel damping ratio ζ")
-    ap.add_argument("--methods", default="Radau,BDF,RK45")
-    ap.add_argument("--stiffness", default="1e2,1e3,1e4,1e5,1e6,1e7")
-    args = ap.parse_args()
     print(f"four-bar converter, I2 = {args.inertia:g} kg·m², ζ = {args.damping:g}, "
           f"{args.turns} turns, rtol 1e-8, atol 1e-10 rad")
     head = (f"{'λ N·m/rad':>10} {'√(λ/I2) 1/s':>12} {'method':>6} {'steps':>8} {'nfev':>9} "
@@ -57,6 +79,137 @@ def main() -> None:
             print(f"{stiffness:>10.0e} {(stiffness / args.inertia) ** 0.5:>12.3g} "
                   f"{method:>6} {r.steps:>8d} {c['nfev']:>9d} {c['njev']:>6d} {c['nlu']:>7d} "
                   f"{r.events:>8d} {wall:>8.2f} {r.dynamic.delta:>10.6f}", flush=True)
+
+
+# ------------------------------------------------------------------ sweep
+def sweep_cases(stiffnesses, problems=tuple(PROBLEMS), variants=tuple(VARIANTS)):
+    for name, variant, method, stiffness, damping in itertools.product(
+            problems, variants, ("Radau", "BDF"), stiffnesses, (0.0, 0.1)):
+        yield {"problem": name, "variant": variant, "method": method,
+               "stiffness": stiffness, "damping_ratio": damping}
+
+
+def _refuse(constant):
+    raise ValueError(f"not JSON: {constant}")
+
+
+def run_case(case: dict, folder: Path, timeout: float) -> dict:
+    """One ``optdesign simulate --json`` in its own process; what it ended in."""
+    data = yaml.safe_load(PROBLEMS[case["problem"]].read_text())
+    data["dynamics"].update(stiffness=case["stiffness"], damping_ratio=case["damping_ratio"])
+    tag = "_".join(str(v).replace(" ", "-") for v in case.values())
+    path = folder / f"{tag}.yaml"
+    path.write_text(yaml.safe_dump(data))
+    command = [sys.executable, "-m", "optdesign", "simulate", str(path), "--json",
+               "--method", case["method"], "--out", str(folder / tag), *VARIANTS[case["variant"]]]
+    clock = time.perf_counter()
+    try:
+        done = subprocess.run(command, capture_output=True, text=True, cwd=ROOT,
+                              timeout=timeout, env=os.environ | {"PYTHONPATH": str(ROOT)})
+    except subprocess.TimeoutExpired:
+        return case | {"exit": None, "passed": False, "wall_s": timeout,
+                       "reason": f"no answer within {timeout:g} s"}
+    wall = time.perf_counter() - clock
+    err = done.stderr.strip().splitlines()
+    try:
+        result = json.loads(done.stdout, parse_constant=_refuse)
+    except ValueError:
+        result = {}
+    passed = ("Traceback" not in done.stderr and bool(result)
+              and (done.returncode == 0 and not err and result.get("status") == "steady"
+                   or done.returncode == 1 and len(err) == 1
+                   and err[0].endswith(str(result.get("reason")))))
+    return case | {"exit": done.returncode, "passed": passed, "wall_s": round(wall, 2),
+                   "status": result.get("status"), "turns": result.get("cycles"),
+                   "period_turns": result.get("period_turns"),
+                   "delta_dynamic": result.get("delta_dynamic"),
+                   "omega_out_mean": result.get("omega_out_mean"),
+                   "steps": result.get("steps"),
+                   "reason": result.get("reason") or (err[-1] if err else None)}
+
+
+def sweep(args) -> None:
+    stiffnesses = [1e2, 1e5, 1e8] if args.quick else [10.0 ** k for k in range(2, 9)]
+    cases = list(sweep_cases(stiffnesses, args.problems.split(","), args.variants.split(",")))
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp, ThreadPoolExecutor(args.jobs) as pool:
+        for row in pool.map(lambda c: run_case(c, Path(tmp), args.timeout), cases):
+            rows.append(row)
+            print(f"{row['problem']:8} {row['variant']:14} {row['method']:5} "
+                  f"{row['stiffness']:7.0e} ζ={row['damping_ratio']:<4g} exit {row['exit']} "
+                  f"{row.get('status')!s:10} {row['wall_s']:7.1f} s "
+                  f"{'' if row['passed'] else 'FAILED'}", flush=True)
+    from optdesign.io import atomic_write_json, atomic_write_text
+
+    name = "dynamics_stiffness_quick" if args.quick else "dynamics_stiffness"
+    rows = _merged(RESULTS / f"{name}.json", rows, stiffnesses)
+    atomic_write_json(RESULTS / f"{name}.json", {"cases": rows})
+    atomic_write_text(RESULTS / f"{name}.md", sweep_report(rows))
+    print(f"wrote {RESULTS / name}.md, .json; {sum(r['passed'] for r in rows)} of "
+          f"{len(rows)} runs passed")
+
+
+def _merged(path: Path, rows: list[dict], stiffnesses) -> list[dict]:
+    """``rows`` in place of the same cases of an earlier run in ``path`` (a sweep of some
+    problems or variants refreshes those), in the order of the whole grid."""
+    def key(row):
+        return tuple(row[k] for k in ("problem", "variant", "method", "stiffness",
+                                      "damping_ratio"))
+
+    known = {key(r): r for r in json.loads(path.read_text())["cases"]} if path.exists() else {}
+    known.update({key(r): r for r in rows})
+    order = [key(c) for c in sweep_cases(stiffnesses)]
+    return [known[k] for k in order if k in known]
+
+
+def sweep_report(rows: list[dict]) -> str:
+    """The summary table (one row per problem and variant) and every run."""
+    lines = ["`optdesign simulate` over its promised range, each run the real command in its "
+             "own process at the problem file's settings (100 turns at most, rtol 1e-8); "
+             "stiffness 1e2 … 1e8 N·m/rad × damping ratio {0, 0.1} × {Radau, BDF}. Passed: "
+             "exit 0 and steady, or exit 1 with one line on stderr and the same reason in the "
+             "strict JSON; never a traceback.", "",
+             "| problem | variant | runs | passed | steady | not steady | stalled | failed "
+             "| longest [s] |", "|---|---|---|---|---|---|---|---|---|"]
+    for (name, variant), group in itertools.groupby(
+            rows, key=lambda r: (r["problem"], r["variant"])):
+        group = list(group)
+        count = {s: sum(r.get("status") == s for r in group)
+                 for s in ("steady", "not_steady", "stalled", "failed")}
+        lines.append(f"| {name} | {variant} | {len(group)} | "
+                     f"{sum(r['passed'] for r in group)} | {count['steady']} | "
+                     f"{count['not_steady']} | {count['stalled']} | {count['failed']} | "
+                     f"{max(r['wall_s'] for r in group):.0f} |")
+    lines += ["", "Every run:", "",
+              "| problem | variant | method | λ [N·m/rad] | ζ | exit | status | turns | period "
+              "| δ dynamic | time [s] | reason |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        delta = "–" if r.get("delta_dynamic") is None else f"{r['delta_dynamic']:.4f}"
+        lines.append(f"| {r['problem']} | {r['variant']} | {r['method']} | "
+                     f"{r['stiffness']:.0e} | {r['damping_ratio']:g} | {r['exit']} | "
+                     f"{r.get('status') or '–'} | {r.get('turns') or '–'} | "
+                     f"{r.get('period_turns') or '–'} | {delta} | {r['wall_s']:.1f} | "
+                     f"{(r.get('reason') or '').replace('|', '/')} |")
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sweep", action="store_true", help="the command over its whole range")
+    ap.add_argument("--quick", action="store_true", help="sweep: stiffness 1e2, 1e5, 1e8")
+    ap.add_argument("--jobs", type=int, default=1, help="sweep: runs at once")
+    ap.add_argument("--problems", default=",".join(PROBLEMS),
+                    help="sweep: these problems only (the others' rows are kept)")
+    ap.add_argument("--variants", default=",".join(VARIANTS),
+                    help="sweep: these variants only (the others' rows are kept)")
+    ap.add_argument("--timeout", type=float, default=1800.0, help="sweep: seconds a run")
+    ap.add_argument("--turns", type=int, default=2)
+    ap.add_argument("--inertia", type=float, default=1e-4, help="I2, kg·m²")
+    ap.add_argument("--damping", type=float, default=0.1, help="freewheel damping ratio ζ")
+    ap.add_argument("--methods", default="Radau,BDF,RK45")
+    ap.add_argument("--stiffness", default="1e2,1e3,1e4,1e5,1e6,1e7")
+    args = ap.parse_args()
+    sweep(args) if args.sweep else compare_methods(args)
 
 
 if __name__ == "__main__":

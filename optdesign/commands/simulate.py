@@ -3,12 +3,13 @@
 Needs a ``dynamics:`` section (:mod:`optdesign.dynamics.section`). Writes DIR/dynamics.json,
 DIR/dynamics_cycle.csv and the figures DIR/dynamics_angles.png (the paper's Fig. 2) and
 DIR/dynamics_speeds.png (Fig. 3), all atomically; default DIR is results/NAME/. Exit 0 when the
-cycle repeated, 1 when ``cycles`` ran out first (the last turn is still reported and written).
+cycle repeated; 1 when ``cycles`` ran out first, the output stalls or the integration fails,
+with the reason in one line on stderr and in the JSON's ``reason`` (the last turn is still
+reported and written; a failed integration writes dynamics.json alone).
 """
 from __future__ import annotations
 
-import json
-from pathlib import Path
+import sys
 
 
 def add_parser(sub) -> None:
@@ -29,9 +30,12 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     from dataclasses import replace
 
+    from ..dynamics.section import MAX_CYCLES
     from ..dynamics.steady import simulate
+    from ..errors import SolveError, UsageError
+    from ..io import json_text
+    from ..output_checks import prepare_out
     from ..outputs import write_simulation
-    from ..errors import ProblemError
     from ..problem import load_problem
 
     problem = load_problem(args.problem)
@@ -39,17 +43,45 @@ def run(args) -> int:
     overrides = {k: getattr(args, k) for k in ("freewheel", "crank", "cycles")
                  if getattr(args, k) is not None}
     if overrides.get("cycles", 1) < 1:
-        raise ProblemError(f"--cycles must be at least 1 (got {overrides['cycles']})")
-    result = simulate(problem, replace(section, **overrides), method=args.method)
-    out = Path(args.out) if args.out else Path("results") / problem.name
+        raise UsageError(f"--cycles must be at least 1 (got {overrides['cycles']})")
+    if overrides.get("cycles", 1) > MAX_CYCLES:
+        raise UsageError(f"--cycles must be at most {MAX_CYCLES} (got {overrides['cycles']})")
+    out = prepare_out(args.out, problem.name, files=(
+        "dynamics.json", "dynamics_cycle.csv", "dynamics_angles.png", "dynamics_speeds.png"))
+    section = replace(section, **overrides)
+    try:
+        result = simulate(problem, section, method=args.method)
+    except SolveError as exc:
+        return _failed(problem, section, args, out, exc)
     write_simulation(result, out)
     if args.json:
-        print(json.dumps(result.to_dict(), indent=2))
+        print(json_text(result.to_dict()))
     else:
         print(format_result(result))
         print(f"wrote {out}/dynamics.json, dynamics_cycle.csv, dynamics_angles.png, "
               f"dynamics_speeds.png")
-    return 0 if result.steady else 1
+    if result.steady:
+        return 0
+    print(f"optdesign: {problem.source}: {result.reason}", file=sys.stderr)
+    return 1
+
+
+def _failed(problem, section, args, out, exc) -> int:
+    """An integration that stopped before a cycle: dynamics.json holds status and reason."""
+    from ..dynamics.integrator import StallError
+    from ..dynamics.result import failure_dict
+    from ..io import atomic_write_json, json_text
+
+    data = failure_dict(problem, section, args.method or section.method,
+                        "stalled" if isinstance(exc, StallError) else "failed", str(exc))
+    atomic_write_json(out / "dynamics.json", data)
+    if args.json:
+        print(json_text(data))
+    print(f"optdesign: {problem.source}: {exc}", file=sys.stderr)
+    return 1
+
+
+STATUS_TEXT = {"steady": "steady", "not_steady": "NOT steady", "stalled": "STALLED"}
 
 
 def format_result(r) -> str:
@@ -62,10 +94,12 @@ def format_result(r) -> str:
         f"{r.name}: {r.mechanism}, {r.freewheel} freewheels, {r.crank} crank, {r.method} "
         f"(rtol {r.rtol:g}, atol {r.atol:g} rad)"
         + (" - explicit, for comparison only" if r.method == "RK45" else ""),
-        f"  {'steady' if r.steady else 'NOT steady'} after {r.cycles} turns "
+        f"  {STATUS_TEXT.get(r.status, r.status)} after {r.cycles} turns "
         f"(residual {r.steady_residual:.2g}); {r.steps} steps, {r.events} switches, "
-        f"{r.wall_time_s:.2f} s",
-        f"  cycle time       {r.cycle_time_s:.6f} s",
+        f"{r.wall_time_s:.2f} s" + (f"\n  reason           {r.reason}" if r.reason else ""),
+        f"  cycle time       {r.cycle_time_s:.6f} s"
+        + (f" (the motion repeats every {r.period_turns} turns, {r.period_s:.6f} s)"
+           if r.period_turns > 1 else ""),
         f"  input speed      {r.omega_in_mean:.4f} rad/s (mean)",
         f"  output speed     {r.omega_out_mean:.4f} rad/s (mean), "
         f"{r.dynamic.omega_min:.4f} .. {r.dynamic.omega_max:.4f}",
@@ -76,7 +110,8 @@ def format_result(r) -> str:
         f"(balance {r.power_balance:.2e})",
         f"  steady cycle     freewheel {inst.get('freewheel', '-')} closes, "
         f"t1 {ms(inst.get('t1_s'))} (ε max), t2 {ms(inst.get('t2_s'))} (release), t3 {ms(inst.get('t3_s'))} (next closes)",
-        f"  first turn       t1 {ms(first.get('t1_s'))}, t2 {ms(first.get('t2_s'))}, "
+        f"  first turn       freewheel {first.get('freewheel') or '-'} closes at "
+        f"{ms(first.get('t0_s'))}, t1 {ms(first.get('t1_s'))}, t2 {ms(first.get('t2_s'))}, "
         f"t3 {ms(first.get('t3_s'))}, ε max {first.get('eps_max') or 0:.5g} rad",
     ]
     return "\n".join(lines)

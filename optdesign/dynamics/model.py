@@ -29,6 +29,9 @@ follow from these equations and from the switching rule of the freewheel model:
     one compliant freewheel on the composed position function Φ(φ) of the whole converter (the
     rigid-freewheel output angle, eq. 1-2 for the pulse reducer), c = 0 for ever: after an
     overrun it re-engages only when Φ has caught up with ψ (the paper's t3: Φ(t) = ψ(t)).
+    It closes with an impact (ε̇ > 0 at ε = 0), which an undamped spring returns in full, so
+    the output may bounce for ever; with damping it is a unilateral Kelvin-Voigt contact that
+    pushes only (torque λ·ε + c·ε̇ > 0) and loses energy at every impact.
 """
 from __future__ import annotations
 
@@ -191,9 +194,6 @@ class DriveModel:
         self.composite = section.freewheel == "composite"
         self.constant_crank = section.crank == "constant"
         cls = ComposedPosition if self.composite else Holders
-        if self.composite and section.damping_ratio > 0:
-            raise ProblemError(f"{where}: dynamics.damping_ratio must be 0 with freewheel: "
-                               f"composite (got {section.damping_ratio:g})")
         self.holders = cls(design, stroke, section.reduction)
         lam = np.asarray(section.stiffness_per_phase(count), dtype=float)
         n_signs = len(STROKE_SIGNS[stroke])

@@ -19,7 +19,10 @@ def _axes(ax, figsize):  # noqa: D401 - one axes, made if not given
 
 
 def _which(result) -> str:
-    return "the steady cycle" if result.steady else f"turn {result.cycles} (not steady)"
+    turns = f" of {result.period_turns} turns" if result.period_turns > 1 else ""
+    if result.steady:
+        return f"the steady cycle{turns}"
+    return f"turn {result.cycles} ({result.status.replace('_', ' ')})"
 
 
 def _driving(result):

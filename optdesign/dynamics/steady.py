@@ -1,93 +1,38 @@
-"""Simulate the drive turn by turn until the cycle repeats, then measure the steady cycle.
+"""Simulate the drive turn by turn until the motion repeats, then measure the recorded cycle.
 
-Steady-state criterion (stated once, used everywhere): the state at the start of consecutive
-crank turns (φ = 2π·m) repeats, i.e. over one turn
+Steady-state criterion (stated once, used everywhere): the state at the start of a crank turn
+(φ = 2π·m) repeats after p turns, p = 1 .. ``LONGEST_PERIOD`` (the smallest that does), i.e.
 
-- the crank speed φ̇ and the output speed ψ̇ change by at most ``steady_tol``·ω1,
-- every freewheel torque λ_k·ε_k changes by at most ``steady_tol``·T_ref (T_ref the largest of
-  the mean load and the peak freewheel torque of the turn), with the same freewheels engaged
-  and the output in the same state (moving, or held at rest by its load),
-- and the turn time changes by at most ``steady_tol`` of itself.
+- the crank speed φ̇ and the output speed ψ̇ agree to ``steady_tol``·ω1,
+- every freewheel torque λ_k·ε_k agrees to ``steady_tol``·T_ref (T_ref the largest of the mean
+  load and the peak freewheel torque of the turn), with the same freewheels engaged and the
+  output in the same state (moving, or held at rest by its load); for the ``composite`` model
+  the gap ε of a released freewheel is state too (it must close before the spring pushes
+  again), and counts as the torque λ·ε,
+- and the turn time agrees to ``steady_tol`` of itself.
 
-The turn after the first repeat is recorded densely and measured. Angles are re-based at every
-turn (φ ← φ - 2π, ψ ← 0, references shifted with ψ) so the relative angles ε_k, which are tiny
-for stiff freewheels, are never the difference of two large numbers.
+A period of p > 1 turns is a real limit cycle, not a tolerance artefact: the pulse reducer's
+composite freewheel at λ = 1e4 closes once just before and once just after φ = 0 in
+alternate turns. The p turns after the repeat are recorded densely and measured. A ratchet
+drive whose output stands still for a whole turn has stalled (:mod:`.verdict`). Angles are
+re-based at every turn (φ ← φ - 2π, ψ ← 0, references shifted with ψ) so the relative angles
+ε_k, tiny for stiff freewheels, are never the difference of two large numbers.
 """
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..design import Design
 from ..envelope import StrokeFigures
+from .instants import first_turn_instants, steady_instants
 from .integrator import Integrator, Trace
 from .model import TWO_PI, DriveModel, Mode
+from .result import SimulationResult
 from .section import DynamicsSection
-
-
-@dataclass
-class SimulationResult:
-    """The steady cycle of the drive; speeds rad/s, times s, angles rad, powers W."""
-
-    name: str
-    mechanism: str
-    freewheel: str
-    crank: str
-    method: str
-    rtol: float
-    atol: float
-    steady: bool
-    steady_residual: float
-    cycles: int
-    cycle_time_s: float
-    omega_in_mean: float
-    omega_out_mean: float
-    ratio: float
-    dynamic: StrokeFigures
-    kinematic: StrokeFigures
-    eps_max: float
-    power_in_w: float
-    power_out_w: float
-    steps: int
-    events: int
-    counters: dict
-    wall_time_s: float
-    instants: dict
-    first_turn: dict
-    switches: list
-    labels: list
-    trace: dict = field(repr=False, default_factory=dict)
-
-    @property
-    def power_balance(self) -> float:
-        """(P_in - P_out)/P_in over the steady cycle: 0 for lossless freewheels."""
-        if self.power_in_w == 0:
-            return float("nan")
-        return (self.power_in_w - self.power_out_w) / self.power_in_w
-
-    def to_dict(self) -> dict:
-        return {
-            "name": self.name, "mechanism": self.mechanism,
-            "cycle_time_s": self.cycle_time_s,
-            "omega_in_mean": self.omega_in_mean, "omega_out_mean": self.omega_out_mean,
-            "ratio": self.ratio,
-            "delta_dynamic": self.dynamic.delta, "delta_mean_dynamic": self.dynamic.delta_mean,
-            "delta_kinematic": self.kinematic.delta,
-            "delta_mean_kinematic": self.kinematic.delta_mean,
-            "omega_out_max": self.dynamic.omega_max, "omega_out_min": self.dynamic.omega_min,
-            "eps_max": self.eps_max,
-            "power_in_w": self.power_in_w, "power_out_w": self.power_out_w,
-            "power_balance": self.power_balance,
-            "steps": self.steps, "events": self.events, "cycles": self.cycles,
-            "steady": self.steady, "steady_residual": self.steady_residual,
-            "instants": self.instants, "first_turn": self.first_turn,
-            "switches": self.switches,
-            "model": {"freewheel": self.freewheel, "crank": self.crank, "method": self.method,
-                      "rtol": self.rtol, "atol": self.atol},
-            "counters": self.counters, "wall_time_s": self.wall_time_s,
-        }
+from .verdict import LONGEST_PERIOD, held_whole_turn, judge
 
 
 def simulate(problem, section: DynamicsSection | None = None, method: str | None = None,
@@ -103,7 +48,13 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
     method : str, optional
         Overrides the section's integrator (``Radau``, ``BDF``, ``LSODA``, ``RK45``).
     samples : int
-        Dense-output samples per turn of the recorded steady cycle (extremes of ψ̇).
+        Dense-output samples per turn of the recorded cycle (extremes of ψ̇).
+
+    Raises
+    ------
+    SolveError
+        The integration broke down; :class:`~optdesign.dynamics.integrator.StallError` when
+        the crank cannot get round.
     """
     from ..exact import exact_figures
 
@@ -123,25 +74,31 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
 
 @dataclass
 class _Approach:
-    """The turns run until the cycle repeats: where the recorded turn starts."""
+    """The turns run until the motion repeats: where the recorded cycle starts."""
 
     y: np.ndarray
     mode: Mode
     lead: int
     turns: int
     steady: bool
+    stalled: bool
+    period: int                    # turns of the repeating motion (1 when not steady)
     residual: float
-    first_turn: dict | None
+    residuals: list = field(default_factory=list)     # one-turn residual of every turn
+    impact: float = 0.0            # largest relative speed ε̇ at a closing, any turn
+    first_events: list = field(default_factory=list)  # the events of the first turn
 
 
 @dataclass
 class _Cycle:
-    """The recorded steady turn: the trace and what it sums to."""
+    """The recorded cycle (``turns`` crank turns): the trace and what it sums to."""
 
     start: np.ndarray
     y_end: np.ndarray
     events: list
     period: float
+    turns: int
+    stalled: bool
     t: np.ndarray
     ys: np.ndarray
     eps: np.ndarray
@@ -149,68 +106,103 @@ class _Cycle:
 
 
 def _to_steady(model: DriveModel, integ: Integrator, section) -> _Approach:
-    """Whole turns until two consecutive turns agree to ``steady_tol`` (or ``cycles`` - 1)."""
+    """Whole turns until the turn-start state repeats after 1 .. LONGEST_PERIOD turns, the
+    output stalls, or ``cycles`` - 1 turns have run (the last allowed turn is recorded)."""
     y, mode = _initial_state(model)
-    lead = int(np.argmax(mode.engaged))
-    previous, residual, steady, turns, first_turn = None, np.inf, False, 0, None
-    while turns < section.cycles - 1:          # the last allowed turn is the recorded one
-        y_end, mode, events, period = integ.run_turn(y, mode)
-        turns += 1
-        if first_turn is None:
-            first_turn = _first_turn(events, model.labels(), lead)
-        y, mode = _rebase(model, y_end, mode)
-        signature = _signature(model, y, mode, period)
-        if previous is not None:
-            residual = _change(previous, signature, model, events)
-            if residual <= section.steady_tol:
-                steady = True
-                break
-        previous = signature
-    return _Approach(y, mode, lead, turns, steady, residual, first_turn)
+    run = _Approach(y, mode, int(np.argmax(mode.engaged)), 0, False, False, 1, np.inf)
+    history: list = []               # (signature, T_ref) of the last LONGEST_PERIOD turns
+    while run.turns < section.cycles - 1:
+        stuck = run.mode.stuck
+        y_end, mode, events, period = integ.run_turn(run.y, run.mode)
+        run.turns += 1
+        run.impact = max([run.impact] + [abs(e.speed) for e in events if e.kind == "engage"])
+        if run.turns == 1:
+            run.first_events = events
+        run.y, run.mode = _rebase(model, y_end, mode)
+        if held_whole_turn(model, events, stuck, mode.stuck):
+            run.stalled = True
+            break
+        signature = _signature(model, run.y, run.mode, period)
+        t_ref = _torque_scale(model, events)
+        changes = [_change(old, signature, max(ref, t_ref), model.input_speed)
+                   for old, ref in reversed(history)]       # 1, 2, ... turns back
+        if changes:
+            run.residual = changes[0]
+            run.residuals.append(changes[0])
+        repeat = next((p for p, change in enumerate(changes, 1)
+                       if change <= section.steady_tol), None)
+        if repeat is not None:
+            run.steady, run.period, run.residual = True, repeat, changes[repeat - 1]
+            break
+        history = (history + [(signature, t_ref)])[-LONGEST_PERIOD:]
+    return run
 
 
-def _record_cycle(model: DriveModel, integ: Integrator, approach: _Approach,
+def _record_cycle(model: DriveModel, integ: Integrator, run: _Approach,
                   samples: int) -> _Cycle:
-    """One more turn with dense output: the steady cycle as recorded."""
-    trace = Trace()
-    start = approach.y.copy()
-    y_end, _, events, period = integ.run_turn(approach.y, approach.mode, trace, samples)
-    approach.turns += 1
-    ys = np.asarray(trace.y).T
+    """``run.period`` more turns with dense output, joined into one record: the cycle."""
+    t, y, mode = [], run.y.copy(), run.mode
+    start = y.copy()
+    rows, eps, engaged, events = [], [], [], []
+    offset = np.zeros(6)                 # what the re-basing took off: φ, ψ and the work
+    elapsed, stalled = 0.0, run.stalled
+    for turn in range(run.period):
+        trace = Trace()
+        stuck = mode.stuck
+        y_end, mode, turn_events, duration = integ.run_turn(y, mode, trace, samples)
+        run.turns += 1
+        run.impact = max([run.impact] + [abs(e.speed) for e in turn_events
+                                         if e.kind == "engage"])
+        stalled = stalled or held_whole_turn(model, turn_events, stuck, mode.stuck)
+        t.append(np.asarray(trace.t) + elapsed)
+        rows.append(np.asarray(trace.y).T + offset[:, None])
+        eps.append(np.asarray(trace.eps).T)
+        engaged.append(np.asarray(trace.engaged).T)
+        events += [replace(e, t=e.t + elapsed, phi=e.phi + offset[0]) for e in turn_events]
+        elapsed += duration
+        last = y_end + offset
+        if turn < run.period - 1:
+            offset = offset + np.array([TWO_PI, 0.0, y_end[2], 0.0, y_end[4], y_end[5]])
+            y, mode = _rebase(model, y_end, mode)
+    ys = np.hstack(rows)
     # an output at rest stopped at ψ̇ = -η·ω1 (the event's offset): show it at 0
     ys[3] = np.where((ys[3] < 0) & (ys[3] > -1e-9 * model.input_speed), 0.0, ys[3])
-    return _Cycle(start, y_end, events, period, np.asarray(trace.t), ys,
-                  np.asarray(trace.eps).T, np.asarray(trace.engaged).T)
+    return _Cycle(start, last, events, elapsed, run.period, stalled, np.concatenate(t), ys,
+                  np.hstack(eps), np.hstack(engaged))
 
 
-def _result(problem, section, method, model, integ, approach: _Approach, cycle: _Cycle,
+def _result(problem, section, method, model, integ, run: _Approach, cycle: _Cycle,
             kinematic, wall: float) -> SimulationResult:
     """The figures of the recorded cycle (dynamic δ, ratio, power balance, instants)."""
     ys, start, y_end, period, events = cycle.ys, cycle.start, cycle.y_end, cycle.period, \
         cycle.events
-    omega_in_mean = TWO_PI / period
+    omega_in_mean = TWO_PI * cycle.turns / period
     omega_out_mean = (y_end[2] - start[2]) / period
     dynamic = StrokeFigures.from_extremes(ys[3].max(), ys[3].min(), omega_out_mean,
                                           omega_in_mean)
     eps_engaged = np.where(cycle.engaged, cycle.eps, -np.inf)
     eps_max = max([float(eps_engaged.max())] + [e.eps for e in events if e.kind == "eps_max"])
+    verdict = judge(model, section, run.turns, run.steady, cycle.stalled, run.residuals,
+                    events, run.impact)
     c = integ.counters
     labels = model.labels()
+    band = 10.0 * integ.eta
     return SimulationResult(
         name=problem.name, mechanism=problem.mechanism, freewheel=section.freewheel,
         crank=section.crank, method=method, rtol=section.rtol, atol=section.atol,
-        steady=approach.steady, steady_residual=float(approach.residual),
-        cycles=approach.turns, cycle_time_s=float(period),
+        status=verdict.status, reason=verdict.reason,
+        steady_residual=float(run.residual), cycles=run.turns,
+        period_turns=cycle.turns, period_s=float(period),
         omega_in_mean=float(omega_in_mean), omega_out_mean=float(omega_out_mean),
-        ratio=float(omega_out_mean / omega_in_mean),
         dynamic=dynamic, kinematic=kinematic, eps_max=eps_max,
         power_in_w=float((y_end[4] - start[4]) / period),
         power_out_w=float((y_end[5] - start[5]) / period),
         steps=c.steps, events=c.events,
         counters={"nfev": c.nfev, "njev": c.njev, "nlu": c.nlu, "segments": c.segments,
+                  "fallbacks": c.fallbacks,
                   "steady_cycle_events": sum(e.kind != "eps_max" for e in events)},
-        wall_time_s=wall, instants=_instants(events, period, labels),
-        first_turn=approach.first_turn or _first_turn(events, labels, approach.lead),
+        wall_time_s=wall, instants=steady_instants(events, period, labels, band),
+        first_turn=first_turn_instants(run.first_events or events, labels, run.lead, band),
         switches=[{"t_s": float(e.t), "phi_deg": float(np.degrees(e.phi)), "kind": e.kind,
                    "freewheel": labels[e.wheel] if e.wheel >= 0 else None, "eps": e.eps}
                   for e in events],
@@ -249,18 +241,24 @@ def _rebase(model: DriveModel, y: np.ndarray, mode: Mode) -> tuple[np.ndarray, M
 
 
 def _signature(model, y, mode, period):
+    """The turn-start state the criterion compares: crank and output speeds, freewheel
+    torques (a composite freewheel's gap too), the discrete mode, the turn time."""
     _, _, _, eps, _, _ = model.forces(y, mode)
-    torque = np.where(mode.engaged, model.stiffness * eps, 0.0)
+    state = mode.engaged | model.composite
+    torque = np.where(state, model.stiffness * eps, 0.0)
     return y[1], y[3], torque, np.append(mode.engaged, mode.stuck), period
 
 
-def _change(a, b, model, events) -> float:
-    """Largest relative change of the turn-start state (the criterion in the module doc)."""
+def _torque_scale(model, events) -> float:
+    """T_ref of a turn: the mean load or the largest freewheel torque peak, if larger."""
+    peaks = [model.stiffness[e.wheel] * e.eps for e in events if e.kind == "eps_max"]
+    return max([model.load.mean, 1e-12] + peaks)
+
+
+def _change(a, b, t_ref: float, w: float) -> float:
+    """Largest relative change between two turn-start states (the module's criterion)."""
     if not np.array_equal(a[3], b[3]):
         return np.inf
-    peaks = [model.stiffness[e.wheel] * e.eps for e in events if e.kind == "eps_max"]
-    t_ref = max([model.load.mean, 1e-12] + peaks)
-    w = model.input_speed
     return float(max(abs(a[0] - b[0]) / w, abs(a[1] - b[1]) / w,
                      np.max(np.abs(a[2] - b[2]), initial=0.0) / t_ref,
                      abs(a[4] - b[4]) / b[4]))
@@ -271,42 +269,3 @@ def _holder_speeds(model, ys) -> np.ndarray:
     for j in range(ys.shape[1]):
         out[:, j] = model.holders(ys[0, j])[1] * ys[1, j]
     return out
-
-
-def _instants(events, period, labels) -> dict:
-    """The paper's instants, from the first engagement of the steady turn (t = 0 there):
-    t1 end of jamming (ε max), t2 release (start of the overrun), t3 next engagement."""
-    first = next((e for e in events if e.kind == "engage"), None)
-    if first is None:
-        return {"note": "no freewheel engages in the steady cycle"}
-    # events before the first engagement belong, in the periodic cycle, one turn later
-    rel = sorted(((e.t - first.t) % period, e) for e in events)
-    wheel = first.wheel
-    t1 = next((t for t, e in rel if e.kind == "eps_max" and e.wheel == wheel), None)
-    t2 = next((t for t, e in rel if e.kind == "release" and e.wheel == wheel), None)
-    t3 = next((t for t, e in rel if e.kind == "engage" and t2 is not None and t > t2), None)
-    if t3 is None and t2 is not None:
-        t3 = period                       # only this engagement per turn: it comes back
-    return {"freewheel": labels[wheel], "t0_in_turn_s": float(first.t),
-            "t1_s": t1 and float(t1), "t2_s": t2 and float(t2), "t3_s": t3 and float(t3)}
-
-
-def _first_turn(events, labels, wheel: int) -> dict:
-    """The same instants in the first turn from the start state, t = 0 at φ = 0 where
-    freewheel ``wheel`` has just closed: the paper's single computed cycle. t1, t2 are that
-    freewheel's ε maximum and release, t3 the next closing of any freewheel after t2."""
-    def first(kind, after=-1.0, own=True):
-        return next((e for e in events if e.kind == kind and e.t > after
-                     and (e.wheel == wheel) == own), None)
-
-    t1, t2 = first("eps_max"), first("release")
-    t3 = None
-    if t2 is not None:
-        t3 = first("engage", t2.t, own=False) or first("engage", t2.t)
-        if t3 is not None and labels[t3.wheel] == labels[wheel] and len(labels) > 1:
-            t3 = min((e for e in events if e.kind == "engage" and e.t > t2.t),
-                     key=lambda e: e.t)
-    return {"freewheel": labels[wheel], "t1_s": t1 and float(t1.t),
-            "t2_s": t2 and float(t2.t), "t3_s": t3 and float(t3.t),
-            "t3_freewheel": t3 and labels[t3.wheel],
-            "eps_max": t1 and float(t1.eps)}

@@ -37,7 +37,7 @@ def fourbar_steady():
 @pytest.mark.parametrize("which", ["paper", "fourbar_steady"])
 def test_energy_over_the_steady_cycle(which, request):
     """Lossless freewheels (damping_ratio 0): the springs return what they store, so over a
-    steady cycle the motor's mean power equals the load's within 0.5 % (the issue's check);
+    steady cycle the motor's mean power equals the load's within 0.5 %;
     with rtol 1e-8 and steady_tol 1e-6 the imbalance is in fact below 1e-5."""
     r = request.getfixturevalue(which)
     assert r.steady

@@ -131,3 +131,14 @@ def test_driveline_violated_unchecked_and_without_an_output_speed(tmp_path, caps
     assert d["operating_speed_rad_s"] is None and d["critical_speed_rad_s"] > 0
     assert "does not assemble" in d["failure"]["message"]
     assert (tmp_path / "c" / "driveline.png").exists()
+
+
+def test_simulate_reports_each_turn_to_its_progress_callback():
+    from optdesign.dynamics.steady import simulate
+    from optdesign.problem import load_problem
+    from tests.conftest import ROOT
+
+    turns = []
+    result = simulate(load_problem(ROOT / "problems" / "sharkov2022_dynamics.yaml"),
+                      progress=lambda: turns.append(1))
+    assert len(turns) == result.cycles >= 1

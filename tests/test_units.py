@@ -51,6 +51,11 @@ def outputs(tmp_path_factory):
     code, out = run(["driveline", PROBLEMS / "driveline.yaml", "--json", "--out", tmp / "dl"])
     assert code == 0
     docs["driveline --json"] = json.loads(out)
+    code, out = run(["simulate", PROBLEMS / "sharkov2022_dynamics.yaml", "--json", "--out",
+                     tmp / "sim"])
+    assert code in (0, 1)
+    docs["simulate --json"] = json.loads(out)
+    docs["dynamics.json"] = json.loads((tmp / "sim" / "dynamics.json").read_text())
     return docs, texts
 
 
@@ -77,7 +82,8 @@ def unlisted(document: dict) -> set[str]:
 
 
 DOCUMENTS = ["analyze driveline", "analyze vergov", "analyze pulse_reducer", "solve --json",
-             "result.json", "pareto.json", "driveline --json"]
+             "result.json", "pareto.json", "driveline --json", "simulate --json",
+             "dynamics.json"]
 
 
 def test_schema_version_is_one_dotted_string():

@@ -49,8 +49,11 @@ def run(args) -> int:
     out = prepare_out(args.out, problem.name, files=(
         "dynamics.json", "dynamics_cycle.csv", "dynamics_angles.png", "dynamics_speeds.png"))
     section = replace(section, **overrides)
-    try:
-        result = simulate(problem, section, method=args.method)
+    from tqdm import tqdm
+    try:                # turns until the cycle repeats: the bar ends early when it does
+        with tqdm(total=section.cycles, desc="turns", unit="turn", file=sys.stderr,
+                  disable=None, leave=False) as bar:
+            result = simulate(problem, section, method=args.method, progress=bar.update)
     except SolveError as exc:
         return _failed(problem, section, args, out, exc)
     write_simulation(result, out)

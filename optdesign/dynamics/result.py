@@ -74,7 +74,10 @@ class SimulationResult:
         return (self.power_in_w - self.power_out_w) / self.power_in_w
 
     def to_dict(self) -> dict:
-        return {
+        """dynamics.json: the contract's keys, then ``schema_version`` and ``units``."""
+        from ..units import stamped
+
+        return stamped({
             "name": self.name, "mechanism": self.mechanism,
             "status": self.status, "reason": self.reason,
             "cycle_time_s": self.cycle_time_s,
@@ -95,12 +98,14 @@ class SimulationResult:
             "model": {"freewheel": self.freewheel, "crank": self.crank, "method": self.method,
                       "rtol": self.rtol, "atol": self.atol},
             "counters": self.counters, "wall_time_s": self.wall_time_s,
-        }
+        })
 
 
 def failure_dict(problem, section, method: str, status: str, reason: str) -> dict:
     """``dynamics.json`` of a run whose integration stopped before a cycle was recorded."""
-    return {"name": problem.name, "mechanism": problem.mechanism, "status": status,
-            "reason": reason, "steady": False,
-            "model": {"freewheel": section.freewheel, "crank": section.crank,
-                      "method": method, "rtol": section.rtol, "atol": section.atol}}
+    from ..units import stamped
+
+    return stamped({"name": problem.name, "mechanism": problem.mechanism, "status": status,
+                    "reason": reason, "steady": False,
+                    "model": {"freewheel": section.freewheel, "crank": section.crank,
+                              "method": method, "rtol": section.rtol, "atol": section.atol}})

@@ -36,7 +36,7 @@ from .verdict import LONGEST_PERIOD, held_whole_turn, judge
 
 
 def simulate(problem, section: DynamicsSection | None = None, method: str | None = None,
-             samples: int = 2000) -> SimulationResult:
+             samples: int = 2000, progress=None) -> SimulationResult:
     """Run the ``dynamics:`` section of ``problem`` to its steady cycle.
 
     Parameters
@@ -49,6 +49,8 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
         Overrides the section's integrator (``Radau``, ``BDF``, ``LSODA``, ``RK45``).
     samples : int
         Dense-output samples per turn of the recorded cycle (extremes of ψ̇).
+    progress : callable, optional
+        Called once per crank turn integrated on the way to the steady cycle.
 
     Raises
     ------
@@ -65,8 +67,10 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
     model = DriveModel(design, problem.stroke, problem.input_speed, section, problem.source)
     integ = Integrator(model, method, section.rtol, section.atol)
     clock = time.perf_counter()
-    approach = _to_steady(model, integ, section)
+    approach = _to_steady(model, integ, section, progress)
     cycle = _record_cycle(model, integ, approach, samples)
+    for _ in range(approach.period if progress else 0):     # the recorded cycle's turns
+        progress()
     wall = time.perf_counter() - clock
     kinematic, _ = exact_figures(design, problem.stroke, problem.input_speed)
     return _result(problem, section, method, model, integ, approach, cycle, kinematic, wall)
@@ -105,7 +109,7 @@ class _Cycle:
     engaged: np.ndarray
 
 
-def _to_steady(model: DriveModel, integ: Integrator, section) -> _Approach:
+def _to_steady(model: DriveModel, integ: Integrator, section, progress=None) -> _Approach:
     """Whole turns until the turn-start state repeats after 1 .. LONGEST_PERIOD turns, the
     output stalls, or ``cycles`` - 1 turns have run (the last allowed turn is recorded)."""
     y, mode = _initial_state(model)
@@ -115,6 +119,8 @@ def _to_steady(model: DriveModel, integ: Integrator, section) -> _Approach:
         stuck = run.mode.stuck
         y_end, mode, events, period = integ.run_turn(run.y, run.mode)
         run.turns += 1
+        if progress:
+            progress()
         run.impact = max([run.impact] + [abs(e.speed) for e in events if e.kind == "engage"])
         if run.turns == 1:
             run.first_events = events

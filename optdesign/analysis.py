@@ -107,27 +107,21 @@ def analyze(problem, values: dict | None = None) -> AnalysisResult:
     for key, section in problem.sections.items():
         if hasattr(section, "analyze"):
             result.sections[key] = section.analyze(problem, result)
-    result.constraints = check_constraints(problem, dict(design.values))
+    result.constraints = check_constraints(problem, ev)
     return result
 
 
-def check_constraints(problem, values: dict) -> list[dict]:
-    """Every constraint of the problem (:func:`optdesign.criteria.constraints_of`) checked
-    exactly on ``values``, as the solver's verification checks an optimum."""
-    from .criteria import constraints_of
-    from .solve.verify import verify
+def check_constraints(problem, ev) -> list[dict]:
+    """Every constraint of the problem checked on the evaluation ``ev`` (listed
+    eccentricities and e = 1) exactly as the solver's verification checks an optimum
+    (:func:`optdesign.solve.verify.checks`), without evaluating the design again."""
+    from .criteria import Measured
+    from .solve.verify import checks
 
-    ver = verify(problem, values)
-    if ver.measured is None:
-        return []
-    out = []
-    for criterion in constraints_of(problem):
-        amount = float(criterion.violation(problem, ver.measured))
-        out.append({"name": criterion.name,
-                    "satisfied": amount <= criterion.tolerance(ver.measured),
-                    "margin": 0.0 - amount if np.isfinite(amount) else None,
-                    "unit": criterion.unit or "-"})
-    return out
+    return [{"name": criterion.name, "satisfied": holds,
+             "margin": 0.0 - amount if np.isfinite(amount) else None,
+             "unit": criterion.unit or "-"}
+            for criterion, amount, holds in checks(problem, Measured.of(problem, ev))]
 
 
 def format_analysis(result: AnalysisResult, name: str = "") -> str:

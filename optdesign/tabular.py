@@ -14,7 +14,11 @@ class Tabular:
     def summary(self) -> str:                              # pragma: no cover - abstract
         raise NotImplementedError
 
+    def shown_frame(self):
+        """The frame the HTML representation shows (:meth:`to_frame` unless overridden)."""
+        return self.to_frame()
+
     def _repr_html_(self) -> str:
-        table = self.to_frame().to_html(float_format=lambda v: f"{v:.6g}", na_rep="–",
+        table = self.shown_frame().to_html(float_format=lambda v: f"{v:.6g}", na_rep="–",
                                         index=False, border=0)
         return f"<p><b>{html.escape(self.summary())}</b></p>\n{table}"

@@ -83,12 +83,9 @@ class ParetoResult(Tabular):
         """Every point of the sweep (a copy of :attr:`points`)."""
         return self.points.copy()
 
-    def _repr_html_(self) -> str:
-        import html
-
-        table = self.front.to_html(float_format=lambda v: f"{v:.6g}", na_rep="–",
-                                   index=False, border=0)
-        return f"<p><b>{html.escape(self.summary())}</b></p>\n{table}"
+    def shown_frame(self):
+        """A notebook shows the front (the non-dominated designs), not every point."""
+        return self.front
 
     def to_dict(self) -> dict:
         """pareto.json: the run, the indicators, the knee, every point and the raw ends, then

@@ -20,8 +20,8 @@ from .nlp import tag_of
 
 #: the tolerances and the eccentricity order are the criteria's and the evaluation's; they are
 #: importable from here too, where the exact check is
-__all__ = ["TOL_ANGLE_DEG", "TOL_LENGTH_REL", "TOL_RATIO", "Verification", "eccentricities_of",
-           "start_guess", "verify"]
+__all__ = ["TOL_ANGLE_DEG", "TOL_LENGTH_REL", "TOL_RATIO", "Verification", "checks",
+           "eccentricities_of", "start_guess", "verify"]
 
 
 @dataclass
@@ -68,14 +68,23 @@ def verify(problem, values: dict[str, float]) -> Verification:
     ver = Verification(True, delta=m.worst_ripple, ratio=m.ratio,
                        min_angle_deg=m.min_angle_deg, evaluation=ev, measured=m,
                        key=objective_of(problem).key(m))
-    for criterion in constraints_of(problem):
-        amount = criterion.violation(problem, m)
-        if amount > criterion.tolerance(m):
-            ver.violations[criterion.name] = float(amount)
+    for criterion, amount, holds in checks(problem, m):
+        if not holds:
+            ver.violations[criterion.name] = amount
             ver.feasible = False
             if isinstance(criterion, SectionConstraint):
                 ver.message = criterion.message(problem, m)
     return ver
+
+
+def checks(problem, m: Measured) -> list[tuple]:
+    """Every constraint of ``problem`` checked on the measured design ``m``: (criterion, its
+    violation (<= 0 when met), whether it holds within the criterion's tolerance)."""
+    out = []
+    for criterion in constraints_of(problem):
+        amount = float(criterion.violation(problem, m))
+        out.append((criterion, amount, amount <= criterion.tolerance(m)))
+    return out
 
 
 def start_guess(nlp, ver: Verification) -> dict:

@@ -9,7 +9,8 @@ A generated block in a Markdown page is wrapped in two comments:
     <!-- end generated -->
 
 The first names the command that writes the results file and the file (in parentheses, a
-path from the repository root). The block's content is the file's table part: every Markdown
+path from the repository root, optionally followed by ``#2`` or ``#1,3``: only those of its
+tables, counted from 1). The block's content is the file's table part: every Markdown
 table in it (runs of lines starting with ``|``), in order, separated by one blank line, then
 one line saying where and when it was measured. That line is taken from the ``meta`` of the
 results file's JSON twin (same name, ``.json``; its ``time``, ``python`` and, when recorded,
@@ -99,11 +100,27 @@ def tables(text: str) -> list[str]:
     return out
 
 
-def table_part(source: Path) -> list[str]:
-    """The lines a block shows of its results file, without the measured-on line."""
+def split_source(source: str) -> tuple[str, list[int]]:
+    """'path#2,3' -> ('path', [2, 3]): a block may show some of its file's tables (1-based)."""
+    path, _, picks = source.partition("#")
+    if not picks:
+        return path, []
+    try:
+        return path, [int(k) for k in picks.split(",")]
+    except ValueError:
+        raise ValueError(f"{source}: after '#' come table numbers, e.g. '#1' or '#2,3'") from None
+
+
+def table_part(source: Path, picks: list[int] | None = None) -> list[str]:
+    """The lines a block shows of its results file (all its tables, or the ``picks``-th ones,
+    counted from 1), without the measured-on line."""
     found = tables(source.read_text(encoding="utf-8"))
     if not found:
         raise ValueError(f"{source}: no Markdown table in it")
+    if picks:
+        if not all(1 <= k <= len(found) for k in picks):
+            raise ValueError(f"{source}: has {len(found)} tables, a block asks for {picks}")
+        found = [found[k - 1] for k in picks]
     return "\n\n".join(found).splitlines()
 
 
@@ -139,11 +156,12 @@ def differences(root: Path = ROOT) -> list[str]:
     problems = []
     for page in pages(root):
         for block in blocks(page):
-            source = root / block.source
+            path, picks = split_source(block.source)
+            source = root / path
             if not source.is_file():
-                problems.append(f"{block.where}: {block.source} does not exist "
+                problems.append(f"{block.where}: {path} does not exist "
                                 f"(run: {block.command})")
-            elif shown_table(block) != table_part(source):
+            elif shown_table(block) != table_part(source, picks):
                 problems.append(f"{block.where}: differs from {block.source} "
                                 f"(run: {block.command}, then benchmarks/docs.py --splice)")
     return problems
@@ -158,11 +176,12 @@ def splice(root: Path = ROOT) -> list[str]:
             continue
         lines = page.read_text(encoding="utf-8").splitlines()
         for block in reversed(found):          # from the bottom: earlier indices stay valid
-            source = root / block.source
+            path, picks = split_source(block.source)
+            source = root / path
             if not source.is_file():
-                raise FileNotFoundError(f"{block.where}: {block.source} does not exist "
+                raise FileNotFoundError(f"{block.where}: {path} does not exist "
                                         f"(run: {block.command})")
-            new = table_part(source) + ["", measured_line(source)]
+            new = table_part(source, picks) + ["", measured_line(source)]
             lines[block.begin + 1:block.end] = new
         text = "\n".join(lines) + "\n"
         if text != page.read_text(encoding="utf-8"):

@@ -10,8 +10,10 @@ Methods (the default): Sharkov & Kalinin's six-phase four-bar converter
 output (I2) and a 20 N·m load, simulated for a fixed number of crank turns from the same start
 with each method at rtol 1e-8, atol 1e-10 rad. Prints one row per (stiffness, method):
 accepted steps, right-hand-side evaluations, Jacobians, LU factorisations, switches, wall time,
-and the dynamic δ of the last turn (the methods must agree on it). docs/dynamics.md holds the
-table of one run.
+and the dynamic δ of the last turn (the methods must agree on it), and writes them to
+benchmarks/results/NAME.{md,json} (``--name``, default dynamics_methods; the undamped run of
+docs/dynamics.md is ``--damping 0 --turns 1 --stiffness 1e2,1e4,1e5,1e6 --name
+dynamics_methods_undamped``), whose tables docs/dynamics.md and the README show.
 
 Sweep (``--sweep``): the promised range of ``optdesign simulate`` at the problem files' own
 settings (100 turns at most, rtol 1e-8, atol 1e-10): stiffness 1e2 … 1e8 N·m/rad per decade ×
@@ -61,14 +63,21 @@ def problem(stiffness: float, inertia: float, damping: float, turns: int):
 
 
 def compare_methods(args) -> None:
+    """One row per (stiffness, method), printed as it comes, then written to
+    benchmarks/results/NAME.{md,json} (NAME from ``--name``): table 1 every row, table 2 the
+    README's columns (Radau against RK45)."""
     from optdesign.dynamics.steady import simulate
+    from optdesign.io import atomic_write_json, atomic_write_text
 
-    print(f"four-bar converter, I2 = {args.inertia:g} kg·m², ζ = {args.damping:g}, "
-          f"{args.turns} turns, rtol 1e-8, atol 1e-10 rad")
+    conditions = (f"four-bar converter, I2 = {args.inertia:g} kg·m², damping ratio "
+                  f"{args.damping:g}, {args.turns} turns from the same start, rtol 1e-8, "
+                  f"atol 1e-10 rad")
+    print(conditions)
     head = (f"{'λ N·m/rad':>10} {'√(λ/I2) 1/s':>12} {'method':>6} {'steps':>8} {'nfev':>9} "
             f"{'njev':>6} {'nlu':>7} {'switches':>8} {'time s':>8} {'δ dynamic':>10}")
     print(head)
     print("-" * len(head))
+    rows = []
     for stiffness in (float(s) for s in args.stiffness.split(",")):
         for method in args.methods.split(","):
             p = problem(stiffness, args.inertia, args.damping, args.turns)
@@ -76,9 +85,44 @@ def compare_methods(args) -> None:
             r = simulate(p, method=method)
             wall = time.perf_counter() - clock
             c = r.counters
+            rows.append({"stiffness": stiffness, "omega_stiff": (stiffness / args.inertia) ** 0.5,
+                         "method": method, "steps": r.steps, "nfev": c["nfev"],
+                         "njev": c["njev"], "nlu": c["nlu"], "switches": r.events,
+                         "time_s": wall, "delta_dynamic": r.dynamic.delta})
             print(f"{stiffness:>10.0e} {(stiffness / args.inertia) ** 0.5:>12.3g} "
                   f"{method:>6} {r.steps:>8d} {c['nfev']:>9d} {c['njev']:>6d} {c['nlu']:>7d} "
                   f"{r.events:>8d} {wall:>8.2f} {r.dynamic.delta:>10.6f}", flush=True)
+    meta = {"python": sys.version.split()[0], "time": time.strftime("%Y-%m-%d %H:%M:%S"),
+            "cores": os.cpu_count(), "conditions": conditions,
+            "command": "PYTHONPATH=. python benchmarks/dynamics_stiffness.py " +
+                       " ".join(sys.argv[1:])}
+    atomic_write_json(RESULTS / f"{args.name}.json", {"meta": meta, "rows": rows})
+    atomic_write_text(RESULTS / f"{args.name}.md", methods_report(rows, conditions))
+    print(f"wrote {RESULTS / (args.name + '.md')}")
+
+
+def methods_report(rows: list[dict], conditions: str) -> str:
+    """Table 1: every (stiffness, method); table 2: Radau against RK45 per stiffness."""
+    lines = [f"Explicit against implicit: {conditions}; one run on a shared machine, wall "
+             "times with other jobs running.", "",
+             "| λ [N·m/rad] | √(λ/I2) [1/s] | method | steps | nfev | njev | nlu | switches | "
+             "time [s] | δ dynamic |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['stiffness']:.0e} | {r['omega_stiff']:.3g} | {r['method']} | "
+                     f"{r['steps']} | {r['nfev']} | {r['njev']} | {r['nlu']} | {r['switches']} | "
+                     f"{r['time_s']:.2f} | {r['delta_dynamic']:.6f} |")
+    by = {(r["stiffness"], r["method"]): r for r in rows}
+    pairs = [s for s in dict.fromkeys(r["stiffness"] for r in rows)
+             if (s, "Radau") in by and (s, "RK45") in by]
+    if pairs:
+        lines += ["", "Radau against RK45:", "",
+                  "| λ [N·m/rad] | Radau steps | Radau time [s] | RK45 steps | RK45 time [s] | "
+                  "δ dynamic |", "|---|---|---|---|---|---|"]
+        for s in pairs:
+            a, b = by[(s, "Radau")], by[(s, "RK45")]
+            lines.append(f"| {s:.0e} | {a['steps']} | {a['time_s']:.2f} | {b['steps']} | "
+                         f"{b['time_s']:.2f} | {a['delta_dynamic']:.4f} |")
+    return "\n".join(lines) + "\n"
 
 
 # ------------------------------------------------------------------ sweep
@@ -208,6 +252,8 @@ def main() -> None:
     ap.add_argument("--damping", type=float, default=0.1, help="freewheel damping ratio ζ")
     ap.add_argument("--methods", default="Radau,BDF,RK45")
     ap.add_argument("--stiffness", default="1e2,1e3,1e4,1e5,1e6,1e7")
+    ap.add_argument("--name", default="dynamics_methods",
+                    help="methods: results file benchmarks/results/NAME.{md,json}")
     args = ap.parse_args()
     sweep(args) if args.sweep else compare_methods(args)
 

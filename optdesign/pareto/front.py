@@ -14,14 +14,18 @@ from .indicators import indicators, non_dominated, objectives
 LEAD = ["phases", "delta", "ratio"]
 TAIL = ["status", "min_transmission_angle_deg", "pin_radius", "ratio_multiplier", "epsilon",
         "kind", "count_front", "non_dominated", "binding", "ipopt_status", "iterations",
-        "time_s"]
+        "time_s", "round", "start_from", "merged"]
 
 
 def frame(records: list[dict], lengths: list[str]):
-    """DataFrame of the grid-point records, sorted by phase count and ratio.
+    """DataFrame of the grid-point records, sorted by phase count and ε (refined points
+    among the others).
 
     ``count_front``: non-dominated among the feasible points of its own phase count;
-    ``non_dominated``: non-dominated among the feasible points of every count.
+    ``non_dominated``: non-dominated among the feasible points of every count. ``round``: 0
+    for the uniform pass, r >= 1 for the r-th refinement round; ``start_from``: the start
+    that gave the design; ``merged``: how many other ε points reached the same design (one
+    row stands for them, :func:`optdesign.pareto.refine.visible`).
     """
     import pandas as pd
 
@@ -37,7 +41,8 @@ def frame(records: list[dict], lengths: list[str]):
     df["count_front"] = False
     df["non_dominated"] = False
     if len(df):
-        df = df.sort_values(["phases", "index"], kind="stable").reset_index(drop=True)
+        df = df.sort_values(["phases", "epsilon", "index"], kind="stable").reset_index(
+            drop=True)
         ok = df["status"] == "optimal"
         f = objectives(df.loc[ok, "delta"], df.loc[ok, "ratio"])
         df.loc[ok, "non_dominated"] = non_dominated(f)

@@ -34,6 +34,11 @@ def plot_fronts(points, ax=None, title: str | None = None):
         if len(rest):
             ax.plot(rest["ratio"], rest["delta"], MARKERS[j % len(MARKERS)], ms=4, alpha=0.3,
                     color=line.get_color())
+    if "round" in ok:
+        refined = ok[ok["round"].fillna(0) >= 1]
+        if len(refined):
+            ax.plot(refined["ratio"], refined["delta"], "+", ms=6, color="black", mew=0.8,
+                    label="refined ε (after the uniform pass)")
     nd = ok[ok["non_dominated"]]
     ax.plot(nd["ratio"], nd["delta"], "o", ms=10, mfc="none", mec="black", mew=1.0,
             label="non-dominated over every n")
@@ -138,6 +143,16 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
                  f"re-evaluated by the exact evaluator.")]
     out.append(("h2", "Fronts"))
     out.append(("img", "fronts.png", images.get("fronts.png")))
+    pts = result.points
+    if "round" in pts and (pts["round"].fillna(0) >= 1).any():
+        later = pts[pts["round"].fillna(0) >= 1]
+        again = int((later["start_from"] == "dominating").sum())
+        out.append(("p", f"{len(later) - again} point(s) (+ in the figure) were added after the "
+                         f"uniform ε pass where the front was coarse or turned"
+                         + (f", and {again} dominated point(s) re-solved from the design "
+                            f"dominating them" if again else "")
+                         + f"; {int(pts['merged'].fillna(0).sum())} ε point(s) that reached a "
+                           f"design already listed are merged into its row."))
     if images.get("lengths.png") is not None:
         out.append(("h2", "Lengths along the front"))
         out.append(("p", "Each free length of every phase count's front against the ratio it "

@@ -7,6 +7,11 @@ Registered in ``optdesign.problem.SECTION_PARSERS``; every key is optional::
       ratio_lower: 0.5      # sweep ε from here ... (default: the least-ripple design's ratio)
       ratio_upper: 0.8      # ... to here (default: the largest ratio the linkage reaches)
       counts: [4, 6]        # phase counts to sweep (default: every admissible count)
+      refine:               # after the uniform pass, more ε where the front is coarse
+        enabled: true
+        max_gap: 0.1        # normalised (ratio, δ) distance between neighbours
+        max_points: 12      # most refined points per phase count
+        max_turn_deg: 30    # a turn of the slope dδ/d ratio between neighbours
 
 The ε range is always clipped to what each phase count can reach, so a span wider than the
 achievable range is harmless; a span that misses it leaves that count with no sweep points.
@@ -16,6 +21,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..declarations import Key, names
+from .refine import (DEFAULT_MAX_GAP, DEFAULT_MAX_POINTS, DEFAULT_MAX_TURN_DEG, MAX_ROUNDS,
+                     Refinement)
 
 DEFAULT_POINTS = 12
 MAX_POINTS = 1000
@@ -34,8 +41,24 @@ DECLARATION = Key(
         Key("counts", "list", "phase counts to sweep", item=Key("counts", "integer",
             "a phase count", lower=1), min_items=1, default_text="every admissible count",
             example=[6], condition="each one the design admits"),
+        Key("refine", "mapping", "after the uniform pass, more ε values where the front is "
+            f"coarse (at most {MAX_ROUNDS} rounds)",
+            default={"enabled": True, "max_gap": DEFAULT_MAX_GAP,
+                     "max_points": DEFAULT_MAX_POINTS, "max_turn_deg": DEFAULT_MAX_TURN_DEG},
+            keys=(
+                Key("enabled", "bool", "refine at all", default=True),
+                Key("max_gap", "number", "refine until neighbours lie at most this far apart "
+                    "in normalised (ratio, δ) distance (the count's front spans [0, 1] in both)",
+                    unit="-", default=DEFAULT_MAX_GAP, lower=0, open_lower=True, upper=2),
+                Key("max_points", "integer", "most refined points per phase count",
+                    default=DEFAULT_MAX_POINTS, lower=0, upper=MAX_POINTS),
+                Key("max_turn_deg", "number", "also refine where the slope dδ/d ratio "
+                    "(normalised) turns by more than this between neighbours", unit="deg",
+                    default=DEFAULT_MAX_TURN_DEG, lower=0, open_lower=True, upper=90),
+            )),
     ))
 KEYS = names(DECLARATION.keys)
+REFINE_KEYS = names(DECLARATION.key("refine").keys)
 
 
 @dataclass(frozen=True)
@@ -44,6 +67,7 @@ class ParetoSection:
     ratio_lower: float | None = None
     ratio_upper: float | None = None
     counts: tuple[int, ...] | None = None
+    refine: Refinement = Refinement()
     source: str = "<dict>"
 
     def check_problem(self, problem) -> None:
@@ -75,4 +99,10 @@ def parse_section(raw, reader) -> ParetoSection:
         if not isinstance(items, list) or not items:
             raise reader.error("counts", "must be a non-empty list of phase counts")
         kw["counts"] = tuple(sorted({reader.integer(c, "counts", 1) for c in items}))
+    if "refine" in raw:
+        block = reader.mapping({} if raw["refine"] is None else raw["refine"], "refine")
+        reader.known_keys(block, "refine", REFINE_KEYS)
+        declared = DECLARATION.key("refine")
+        kw["refine"] = Refinement(**{k: declared.key(k).read(reader, v, f"refine.{k}")
+                                     for k, v in block.items()})
     return ParetoSection(**kw)

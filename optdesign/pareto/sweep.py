@@ -4,9 +4,13 @@ For each admissible phase count: the two ends of the front (least ripple; larges
 K ε values evenly across the ratio range between them; at each, least δ subject to
 ratio >= ε. The interior points are solved in *chains* that walk away from an end, each point
 warm-started from its neighbour's design (the same NLP re-solved with a new ε parameter), with
-the other end and then the multi-start designs as fallbacks where a point fails. Chains of
-every count run in parallel on local processes or on a Dask cluster; each finished point is
-appended to ``points.jsonl`` at once, so an interrupted sweep resumes where it stopped.
+the best basins of the solve's screening that reach ε as further starts (the screening run
+once per count, :mod:`optdesign.pareto.seeds`), and the other end and then the multi-start
+designs as fallbacks where a point fails. After the uniform pass, rounds of
+:mod:`optdesign.pareto.refine` re-solve dominated points from the designs dominating them and
+add ε values where the front is coarse. Chains of every count run in parallel on local
+processes or on a Dask cluster; each finished point is appended to ``points.jsonl`` at once,
+so an interrupted sweep resumes where it stopped.
 """
 from __future__ import annotations
 
@@ -16,6 +20,7 @@ import sys
 import time
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor
 from concurrent.futures import wait as _wait
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -25,11 +30,16 @@ from . import worker
 from ..errors import OptDesignError
 from ..lifetime import die_with_parent, raise_if_terminated
 from ..outputs import write_front
+from . import refine
 from .front import ParetoResult, evaluate, frame
+from .seeds import ScreenedCount
 from .section import DEFAULT_POINTS, ParetoSection
 from .store import Journal
 
 ENDS = ("least_ripple", "largest_ratio")
+#: pareto.csv/json are rebuilt from the journal at most this often while points come in (a
+#: rebuild takes tens of ms in this process, beside the workers) and once at the end
+REBUILD_EVERY_S = 1.0
 
 
 def grid(section: ParetoSection, ends: dict, points: int) -> np.ndarray:
@@ -178,7 +188,8 @@ class _Sweep:
                          "problem_sha256": hashlib.sha256(repr(problem).encode()).hexdigest(),
                          "points": self.n_points, "counts": self.counts,
                          "ratio_lower": self.section.ratio_lower,
-                         "ratio_upper": self.section.ratio_upper}
+                         "ratio_upper": self.section.ratio_upper,
+                         "refine": asdict(self.section.refine)}
         self.out = Path(out_dir)
         self.journal = Journal(self.out / "points.jsonl")
         self.done = {tuple(r["key"]): r for r in self.journal.start(self.settings, resume)}
@@ -187,11 +198,15 @@ class _Sweep:
         self.n_workers = workers or os.cpu_count() or 1
         self.n_chains = max(2, -(-self.n_workers // max(1, len(self.counts))))
         from tqdm import tqdm
-        self.bar = tqdm(total=len(self.counts) * (self.n_points + 2), initial=self.n_resumed,
+        refined = sum(1 for r in self.done.values() if (r.get("round") or 0) >= 1)
+        self.bar = tqdm(total=len(self.counts) * (self.n_points + 2) + refined,
+                        initial=self.n_resumed,
                         desc="pareto", unit="point", file=sys.stderr,
                         disable=None if progress else True, dynamic_ncols=True)
-        self.running: dict = {}       # future -> (count, chain or None)
+        self.running: dict = {}       # future -> (count, chain, None (an end) or "round")
         self.chains: dict = {}        # (count, j) -> {"order", "pos", "start", "eps", "ends"}
+        self.screened: dict = {}      # count -> ScreenedCount (the box screened once)
+        self.rebuilt = -float("inf")  # when pareto.csv/json were last rebuilt
 
     def run(self) -> ParetoResult:
         interrupted = True
@@ -202,6 +217,7 @@ class _Sweep:
                     self.running[self.ex.submit(worker.solve_end, self.problem, n, k)] = (n, None)
                 if not missing:
                     self.open_count(n)
+                    self.advance(n)
             while self.running:
                 raise_if_terminated()
                 for fut in self.ex.wait_any(list(self.running)):
@@ -210,9 +226,14 @@ class _Sweep:
                     if j is None:
                         if all((count, k) in self.done for k in ENDS):
                             self.open_count(count)
-                    else:
+                    elif j != "round":
                         self.submit_chain(count, j)
-                    _rebuild(self.problem, self.done, self.out, self.settings)
+                    if all(c != count for c, _ in self.running.values()) and \
+                            all((count, k) in self.done for k in ENDS):
+                        self.advance(count)
+                    if time.perf_counter() - self.rebuilt >= REBUILD_EVERY_S:
+                        _rebuild(self.problem, self.done, self.out, self.settings)
+                        self.rebuilt = time.perf_counter()
             interrupted = False
         finally:
             self.bar.close()
@@ -242,9 +263,55 @@ class _Sweep:
             return
         i = c["order"][c["pos"]]
         fallbacks = [e["design"] for e in c["ends"] if e["design"] != c["start"]]
-        fut = self.ex.submit(worker.solve_point, self.problem, count, i, float(c["eps"][i]),
-                             c["start"], fallbacks)
+        eps = float(c["eps"][i])
+        fut = self.ex.submit(worker.solve_point, self.problem, count, i, eps, c["start"],
+                             fallbacks, self.seeds(count, eps, [c["start"]]), [],
+                             {"round": 0})
         self.running[fut] = (count, j)
+
+    def seeds(self, count: int, epsilon: float, near: list[dict]) -> list[dict]:
+        """The screening's best basins that reach ``epsilon`` (``solver.basins`` of them),
+        away from the designs in ``near``; the count is screened on first use."""
+        if count not in self.screened:
+            try:
+                self.screened[count] = ScreenedCount.of(self.problem, count)
+            except (OptDesignError, RuntimeError, ValueError, ArithmeticError):
+                self.screened[count] = None     # no screening: the chains' own starts
+        screened = self.screened[count]
+        return [] if screened is None else \
+            screened.seeds(epsilon, self.problem.solver.basins, near)
+
+    def advance(self, count: int) -> None:
+        """The count's uniform pass (or last round) is finished: submit the first round of
+        :func:`refine.plan` that is not finished yet (re-solves of dominated points, refined
+        ε values). Each round is planned from the earlier rounds' records alone, so a resumed
+        sweep plans the same rounds and solves only what the journal lacks."""
+        if any(c == count for c, _ in self.running.values()):
+            return                      # the count's current pass is still running
+        lengths = list(self.problem.model.lengths)
+        mine = [r for (n, tag), r in self.done.items() if n == count and not isinstance(tag, str)]
+        if not mine:
+            return
+        for r in range(1, refine.MAX_ROUNDS + 1):
+            earlier = [rec for rec in mine if (rec.get("round") or 0) < r]
+            first = max(self.n_points, 1 + max(rec["key"][1] for rec in earlier))
+            tasks = refine.plan(earlier, lengths, self.section.refine, first)
+            if not tasks:
+                return
+            missing = [t for t in tasks if (count, t.index) not in self.done]
+            if not missing:
+                continue
+            self.bar.total += len(missing)
+            self.bar.refresh()
+            for t in missing:
+                seeds = [] if t.replaces is not None else \
+                    self.seeds(count, t.epsilon, [t.start, *t.also])
+                tags = {"round": r} | ({"replaces": t.replaces} if t.replaces is not None
+                                       else {})
+                fut = self.ex.submit(worker.solve_point, self.problem, count, t.index,
+                                     t.epsilon, t.start, [], seeds, t.also, tags)
+                self.running[fut] = (count, "round")
+            return
 
     def open_count(self, count: int) -> None:
         """Both ends of a count are known: lay out its ε grid and start its chains."""
@@ -257,13 +324,13 @@ class _Sweep:
         lo_end, hi_end = ends["least_ripple"], ends["largest_ratio"]
         interior = list(range(len(eps)))
         if eps[0] == lo_end["ratio"] and (count, 0) not in self.done:
-            self.finish(worker.copy_end(lo_end, 0))
+            self.finish(worker.copy_end(lo_end, 0) | {"round": 0})
         if eps[0] == lo_end["ratio"]:
             interior.remove(0)
         last = len(eps) - 1
         if last > 0 and hi_end["feasible"] and eps[-1] == hi_end["ratio"]:
             if (count, last) not in self.done:
-                self.finish(worker.copy_end(hi_end, last))
+                self.finish(worker.copy_end(hi_end, last) | {"round": 0})
             interior.remove(last)
         ok_ends = [e for e in (lo_end, hi_end) if e["feasible"]]
         for j, order in enumerate(_chains(interior, eps, self.n_chains)):
@@ -276,7 +343,7 @@ class _Sweep:
 
 def _rebuild(problem, done: dict, out: Path, settings: dict) -> ParetoResult:
     """The front from every finished record, pareto.csv/json rewritten atomically."""
-    records = list(done.values())
+    records = refine.visible(list(done.values()), list(problem.model.lengths))
     points = frame(records, list(problem.model.lengths))
     overall, per_count = evaluate(points)
     ends = [r for r in records if isinstance(r["key"][1], str)]

@@ -16,6 +16,7 @@ from typing import Any
 from ..errors import OptDesignError
 from ..solve import PhaseSolver, solve_phase
 from ..criteria import LengthConstraint, constraints_of
+from ..sensitivity import sensitivity_record
 from ..solve.starts import start_designs
 
 #: the ripple cap of the largest-ratio solve: loose (midrange δ never exceeds 2)
@@ -77,6 +78,8 @@ class _Point:
                 "delta": figures.delta if exact else None,
                 "ratio": figures.ratio if exact else None,
                 "min_transmission_angle_deg": figures.min_angle_deg if exact else None,
+                "sensitivities": sensitivity_record(
+                    problem, design, getattr(figures, "evaluation", None)) if exact else None,
                 **{k: (v if feasible else None) for k, v in columns.items()},
                 "ratio_multiplier": multiplier,
                 "binding": "; ".join(a["name"] for a in active or []),
@@ -123,40 +126,115 @@ def solve_end(problem, count: int, kind: str) -> dict:
 
 
 def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
-                fallbacks: list[dict]) -> dict:
-    """Least ripple subject to ratio >= ε, warm-started from ``start`` (the chain's previous
-    design); on failure from each of ``fallbacks``, then from the multi-start designs."""
+                fallbacks: list[dict], seeds: list[dict] = (), also: list[dict] = (),
+                tags: dict | None = None) -> dict:
+    """Least ripple subject to ratio >= ε: polished from ``start`` (the chain's previous
+    design) and each of ``also`` (further warm starts: a refined point's other neighbour),
+    then from each of ``seeds`` (the screening's best basins that reach ε, as secondary
+    polishes stopped once they join an optimum already found); the best verified design
+    wins (:func:`best_candidate`). Only when none is feasible: from each of ``fallbacks``,
+    then from the multi-start designs. ``tags`` are added to the record (its round, the point
+    a re-solve replaces)."""
     point = _Point(problem, count, index, "sweep", epsilon)
     solver = _solver(problem, count)
+    found: list[Candidate] = []
     last, note = None, "no start design assembles"
 
-    def attempts():
-        yield from (dict(s) for s in [start, *fallbacks] if s)
-        for d in start_designs(problem, count, problem.solver.starts):
-            yield dict(d.values)
-
-    for values in attempts():
+    def attempt(values, source, secondary=False):
+        nonlocal last, note
         point.tries += 1
+        solver.avoid = [c.outcome.values for c in found if c.feasible] if secondary else []
         try:
-            outcome = solver.solve_from(values, min_ratio=epsilon)
+            outcome = solver.solve_from(dict(values), min_ratio=epsilon, secondary=secondary)
         except (OptDesignError, RuntimeError, ValueError, ArithmeticError) as exc:
             # one start that breaks the evaluator (CasADi raises RuntimeError) is one failed
             # start, not a failed sweep
             note = f"{type(exc).__name__}: {exc}"
-            continue
+            return
+        finally:
+            solver.avoid = []
         last = outcome.record
         point.iterations += last.iterations
-        if last.feasible:
-            mult = last.ratio_multiplier if last.ipopt_status == "Solve_Succeeded" else None
-            return point.record("optimal", outcome.values, outcome.verification, mult,
-                                last.ipopt_status, active=last.active)
-        if point.tries >= 2 + max(1, problem.solver.starts):
-            break
+        found.append(Candidate(outcome, source))
+
+    tags = tags or {}
+    first = "dominating" if tags.get("replaces") is not None else \
+        "chain" if not tags.get("round") else "neighbour"
+    for values in [start, *also]:
+        if values:                  # a second warm start stops once it joins the first's
+            attempt(values, first if values is start else "neighbour", secondary=bool(found))
+    for values in seeds:
+        if not any(_beside(problem, values, c.outcome.values) for c in found if c.feasible):
+            attempt(values, "screening", secondary=bool(found))
+    best = best_candidate(found)
+    if best is None:
+        def rescue():
+            yield from ((dict(s), "other end") for s in fallbacks if s)
+            for d in start_designs(problem, count, problem.solver.starts):
+                yield dict(d.values), "multistart"
+
+        for values, source in rescue():
+            attempt(values, source)
+            best = best_candidate(found)
+            if best is not None or point.tries >= 2 + len(also) + len(seeds) + \
+                    max(1, problem.solver.starts):
+                break
+    if best is not None:
+        rec = best.outcome.record
+        mult = rec.ratio_multiplier if rec.ipopt_status == "Solve_Succeeded" else None
+        out = point.record("optimal", best.outcome.values, best.outcome.verification, mult,
+                           rec.ipopt_status, active=rec.active)
+        return out | {"start_from": best.source} | tags
     # as in solve.driver: infeasible only on IPOPT's word, not for running out of iterations
     status = "infeasible" if last is not None and \
         last.ipopt_status == "Infeasible_Problem_Detected" else "failed"
     return point.record(status, ipopt_status=last.ipopt_status if last else "",
-                        note=last.note if last else note)
+                        note=last.note if last else note) | {"start_from": ""} | tags
+
+
+#: a seed this close to an optimum already found (share of each free length's box) would join
+#: it at once: not polished
+BESIDE_SHARE = 0.02
+
+
+def _beside(problem, a: dict, b: dict) -> bool:
+    return all(abs(a[k] - b[k]) <= BESIDE_SHARE * (problem.design[k].upper -
+                                                   problem.design[k].lower)
+               for k in problem.free_lengths())
+
+
+@dataclass
+class Candidate:
+    """One polish of an ε point: its outcome and where it started (``chain``: the chain's
+    previous design; ``neighbour``: a refined point's neighbour on the front; ``dominating``:
+    the design that dominated the point a re-solve replaces; ``screening``, ``other end``,
+    ``multistart``)."""
+
+    outcome: Any
+    source: str
+
+    @property
+    def feasible(self) -> bool:
+        return bool(self.outcome.record.feasible)
+
+    @property
+    def delta(self) -> float:
+        return float(self.outcome.verification.delta)
+
+
+#: a later candidate must beat the earlier best δ by this share to win (the chain's own
+#: design is kept on a tie: the front stays on one branch where two are equal)
+IMPROVEMENT = 1e-6
+
+
+def best_candidate(candidates: list) -> "Candidate | None":
+    """The verified feasible candidate of least exact δ, or None; of candidates within
+    :data:`IMPROVEMENT` of each other the first (the chain's) is kept."""
+    best = None
+    for c in candidates:
+        if c.feasible and (best is None or c.delta < best.delta * (1 - IMPROVEMENT)):
+            best = c
+    return best
 
 
 def copy_end(end: dict, index: int) -> dict:

@@ -17,7 +17,13 @@ from .conftest import small
     ({"counts": [6]}, "small.yaml: pareto.counts [6] not admissible for design.phases "
                       "(admissible: 4)"),
     ({"span": 1}, "small.yaml: pareto.span is not a known key; known: counts, points, "
-                  "ratio_lower, ratio_upper"),
+                  "ratio_lower, ratio_upper, refine"),
+    ({"refine": {"max_gap": 0}}, "small.yaml: pareto.refine.max_gap must be positive (got 0)"),
+    ({"refine": {"max_points": -1}},
+     "small.yaml: pareto.refine.max_points must be at least 0 (got -1)"),
+    ({"refine": {"enable": False}}, "small.yaml: pareto.refine.enable is not a known key; "
+                                    "did you mean enabled? known: enabled, max_gap, "
+                                    "max_points, max_turn_deg"),
 ])
 def test_bad_pareto_section_exits_2_naming_the_key(write_problem, capsys, pareto, message):
     path = write_problem(small(**pareto), name="small.yaml")

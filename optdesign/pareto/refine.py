@@ -1,0 +1,257 @@
+"""After the uniform pass: one row per design, dominated points re-solved, the front refined
+where it is coarse (docs/pareto.md, "What the sweep does").
+
+Pure functions of the finished records of one phase count, so a resumed sweep plans the very
+same work: round r's points are planned from the records of rounds < r alone, and numbered
+from one past the largest index among them.
+
+- :func:`visible`: the rows a front shows. A re-solve that improves on the point it replaces
+  takes its place (one that does not is dropped); designs of one count whose lengths agree
+  within :data:`SAME_LENGTH_REL` are one row (``merged`` counts the others).
+- :func:`plan`: the next round's solves. Each point dominated by another verified point of
+  its count is re-solved at its ε from the dominating design (once). Then new ε values go
+  into the gaps of the count's front that are longer than ``max_gap`` in normalised
+  (ratio, δ) distance, or where the slope dδ/d ratio (the ε multiplier) turns by more than
+  ``max_turn_deg`` between neighbours, at most ``max_points`` in all, the longest gaps first.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .indicators import non_dominated, objectives
+
+#: two designs of one count are one when every length agrees within this share (of the
+#: larger magnitude, at least 1 mm): IPOPT's tolerance, far below any manufacturing one
+SAME_LENGTH_REL = 1e-4
+#: refinement rounds after the uniform pass (each plans from the finished earlier rounds)
+MAX_ROUNDS = 4
+#: a gap whose open ε interval is narrower than this share of max_gap (normalised ratio) is
+#: settled: an ε tried inside it landed on its upper neighbour, so the front jumps there
+SETTLED_SHARE = 0.125
+#: a slope's turn refines a gap only while the gap is longer than this share of max_gap
+TURN_GAP_SHARE = 0.25
+#: q dominates p only by more than these shares (not by IPOPT's noise)
+DOMINANCE_REL = 1e-6
+
+DEFAULT_MAX_GAP = 0.1
+DEFAULT_MAX_POINTS = 12
+DEFAULT_MAX_TURN_DEG = 30.0
+
+
+@dataclass(frozen=True)
+class Refinement:
+    """``pareto.refine``: whether and how far the front is refined after the uniform pass."""
+
+    enabled: bool = True
+    max_gap: float = DEFAULT_MAX_GAP
+    max_points: int = DEFAULT_MAX_POINTS
+    max_turn_deg: float = DEFAULT_MAX_TURN_DEG
+
+
+@dataclass
+class Task:
+    """One solve a round plans: ε, its starts, and the point it replaces (a re-solve)."""
+
+    index: int
+    epsilon: float
+    start: dict
+    also: list = field(default_factory=list)
+    replaces: int | None = None
+
+
+def _index(r: dict):
+    return r["key"][1]
+
+
+def _ok(r: dict) -> bool:
+    return bool(r.get("feasible")) and r.get("delta") is not None and r.get("ratio") is not None
+
+
+# --------------------------------------------------------------------------- the rows shown
+def superseded(records: list[dict]) -> list[dict]:
+    """``records`` without the points a better re-solve replaced, nor the re-solves that did
+    not improve on their point (a re-solve names the index it replaces in ``replaces``)."""
+    by_index = {_index(r): r for r in records}
+    dropped = set()
+    for r in sorted(records, key=lambda r: (r.get("round") or 0, _index(r))):
+        target = r.get("replaces")
+        if target is None:
+            continue
+        old = by_index.get(target)
+        if _ok(r) and (old is None or not _ok(old) or
+                       r["delta"] < old["delta"] * (1 - DOMINANCE_REL)):
+            dropped.add(target)
+        else:
+            dropped.add(_index(r))
+    return [r for r in records if _index(r) not in dropped]
+
+
+def same_design(a: dict, b: dict, lengths: list[str]) -> bool:
+    """One count, every length within :data:`SAME_LENGTH_REL`."""
+    if a.get("phases") != b.get("phases") or not a.get("design") or not b.get("design"):
+        return False
+    for k in lengths:
+        x, y = a["design"].get(k), b["design"].get(k)
+        if x is None or y is None:
+            return False
+        if abs(x - y) > SAME_LENGTH_REL * max(abs(x), abs(y), 1.0):
+            return False
+    return True
+
+
+def merge_identical(records: list[dict], lengths: list[str]) -> list[dict]:
+    """One record per design (feasible ones; a failed point stays as it is), with ``merged``
+    = how many others it stands for. The one kept: an end of the front first, then the one
+    of largest ε (where the ratio bound binds, so its multiplier is the slope)."""
+    def priority(r):
+        return (r.get("kind") == "sweep", -(r.get("epsilon") or 0.0), _index(r))
+
+    kept: list[dict] = []
+    absorbed: dict = {}
+    for r in sorted((r for r in records if _ok(r)), key=priority):
+        twin = next((k for k in kept if same_design(k, r, lengths)), None)
+        if twin is None:
+            kept.append(r)
+        else:
+            absorbed[_index(r)] = _index(twin)
+    counts: dict = {}
+    for target in absorbed.values():
+        counts[target] = counts.get(target, 0) + 1
+    return [r | {"merged": counts.get(_index(r), 0)} for r in records
+            if _index(r) not in absorbed]
+
+
+def visible(records: list[dict], lengths: list[str]) -> list[dict]:
+    """The grid records a front shows (see the module's docstring); the raw end solves and
+    the other keys pass through."""
+    grid = [r for r in records if not isinstance(_index(r), str)]
+    other = [r for r in records if isinstance(_index(r), str)]
+    out = []
+    for n in sorted({r["phases"] for r in grid}):
+        out += merge_identical(superseded([r for r in grid if r["phases"] == n]), lengths)
+    return out + other
+
+
+# --------------------------------------------------------------------------- gaps
+@dataclass
+class Gap:
+    """Two neighbours of a count's front, in normalised (ratio, δ) distance, the turn of the
+    slope between them, and the open ε interval still worth trying."""
+
+    lower: dict
+    upper: dict
+    distance: float
+    turn_deg: float | None          # None where a neighbour's slope is unknown
+    lo: float
+    hi: float
+
+
+def _angle(slope, ratio_span: float, delta_span: float) -> float | None:
+    if slope is None or not isinstance(slope, (int, float)) or not math.isfinite(slope):
+        return None
+    return math.degrees(math.atan(slope * ratio_span / delta_span))
+
+
+def gaps(front: list[dict], tried: list[dict], settings: Refinement) -> list[Gap]:
+    """The gaps of one count's front (non-dominated feasible records) to refine.
+
+    ``tried``: every record of the count (any ε already solved: an ε inside a gap whose
+    design landed on the gap's upper end shows the front jumps there; a failed one inside a
+    gap leaves that gap alone).
+    """
+    pts = sorted(front, key=lambda r: (r["ratio"], r["delta"]))
+    if len(pts) < 2:
+        return []
+    ratio = np.array([p["ratio"] for p in pts])
+    delta = np.array([p["delta"] for p in pts])
+    r_span, d_span = float(np.ptp(ratio)), float(np.ptp(delta))
+    if r_span <= 0 or d_span <= 0:
+        return []
+    out = []
+    for a, b in zip(pts, pts[1:]):
+        dist = math.hypot((b["ratio"] - a["ratio"]) / r_span, (b["delta"] - a["delta"]) / d_span)
+        ta, tb = (_angle(p.get("ratio_multiplier"), r_span, d_span) for p in (a, b))
+        turn = abs(ta - tb) if ta is not None and tb is not None else None
+        if not (dist > settings.max_gap or (turn is not None and turn > settings.max_turn_deg
+                                            and dist > TURN_GAP_SHARE * settings.max_gap)):
+            continue
+        lo, hi = a["ratio"], b["ratio"]
+        inside = [t for t in tried if t.get("epsilon") is not None and lo < t["epsilon"] < hi]
+        if any(not _ok(t) for t in inside):
+            continue
+        for t in inside:
+            if t["ratio"] >= b["ratio"] * (1 - DOMINANCE_REL):
+                hi = min(hi, t["epsilon"])          # the front jumps between lo and t's ε
+        if (hi - lo) / r_span <= SETTLED_SHARE * settings.max_gap:
+            continue
+        out.append(Gap(a, b, dist, turn, lo, hi))
+    return out
+
+
+def allocate(found: list[Gap], budget: int, max_gap: float) -> list[int]:
+    """New points per gap: each wants ceil(distance / max_gap) − 1 (at least one); with too
+    small a budget, one at a time to the gap whose share (distance / (given + 1)) is longest."""
+    want = [max(1, math.ceil(g.distance / max_gap) - 1) for g in found]
+    given = [0] * len(found)
+    for _ in range(max(0, budget)):
+        open_ = [i for i in range(len(found)) if given[i] < want[i]]
+        if not open_:
+            break
+        i = max(open_, key=lambda i: (found[i].distance / (given[i] + 1), -i))
+        given[i] += 1
+    return given
+
+
+# --------------------------------------------------------------------------- a round's plan
+def dominated(front: list[dict]) -> list[tuple[dict, dict]]:
+    """(point, its best dominator) for every point another one dominates by more than
+    :data:`DOMINANCE_REL`; the dominator of least δ."""
+    out = []
+    for p in front:
+        doms = [q for q in front if q is not p and
+                ((q["delta"] < p["delta"] * (1 - DOMINANCE_REL) and q["ratio"] >= p["ratio"])
+                 or (q["ratio"] > p["ratio"] * (1 + DOMINANCE_REL) and
+                     q["delta"] <= p["delta"]))]
+        if doms:
+            out.append((p, min(doms, key=lambda q: (q["delta"], -q["ratio"]))))
+    return out
+
+
+def plan(records: list[dict], lengths: list[str], settings: Refinement,
+         first_index: int) -> list[Task]:
+    """The next round's solves for one count, from its finished grid records (the rounds
+    before it): re-solves of dominated points, then refined ε values (none when
+    ``settings.enabled`` is false or the ``max_points`` budget is spent). Numbered from
+    ``first_index``."""
+    shown = merge_identical([r for r in superseded(records) if _ok(r)], lengths)
+    attempted = {r.get("replaces") for r in records if r.get("replaces") is not None}
+    tasks: list[Task] = []
+    index = first_index
+    for p, q in sorted(dominated(shown), key=lambda pq: _index(pq[0])):
+        if _index(p) in attempted or p.get("epsilon") is None:
+            continue
+        tasks.append(Task(index, float(p["epsilon"]), q["design"], replaces=_index(p)))
+        index += 1
+    if not settings.enabled:
+        return tasks
+    used = sum(1 for r in records if (r.get("round") or 0) >= 1 and r.get("replaces") is None)
+    mask = non_dominated(objectives([r["delta"] for r in shown], [r["ratio"] for r in shown])) \
+        if shown else []
+    front = [r for r, keep in zip(shown, mask) if keep]
+    found = gaps(front, records, settings)
+    given = allocate(found, settings.max_points - used, settings.max_gap)
+    new = []
+    for g, k in zip(found, given):
+        for j in range(1, k + 1):
+            new.append((g.lo + (g.hi - g.lo) * j / (k + 1), g))
+    for eps, g in sorted(new, key=lambda e: e[0]):
+        # on one smooth stretch the lower neighbour's branch is the front; where the slope
+        # turns, another branch may take over: the upper neighbour's is polished too
+        turns = g.turn_deg is None or g.turn_deg > settings.max_turn_deg
+        tasks.append(Task(index, float(eps), g.lower["design"],
+                          also=[g.upper["design"]] if turns else []))
+        index += 1
+    return tasks

@@ -10,12 +10,12 @@ from importlib import import_module
 
 __version__ = "0.1.0"
 __all__ = ["__version__", "analyze", "load_problem", "pareto", "plot_front", "plot_mechanism",
-           "plot_speeds", "solve"]
+           "plot_speeds", "sensitivities", "solve"]
 
 
 def __getattr__(name: str):
     if name in ("load_problem", "analyze", "as_problem", "plot_front", "plot_mechanism",
-                "plot_speeds"):
+                "plot_speeds", "sensitivities"):
         return getattr(import_module(".api", __name__), name)
     if name in ("solve", "pareto"):            # the packages, callable as the API's functions
         return import_module(f".{name}", __name__)

@@ -153,8 +153,9 @@ def surrogate_figures(problem, values, samples: int, smoothing: float):
 
     fixed = problem.with_values(values)
     fixed = replace(fixed, solver=replace(problem.solver, samples=samples, smoothing=smoothing),
-                    objective=replace(problem.objective, minimize="ripple", min_ratio=0.0),
-                    eccentricities=(1.0,))
+                    objective=replace(problem.objective, minimize="ripple", min_ratio=0.0,
+                                      robust="none"),
+                    eccentricities=(1.0,), eccentricity_range=None)
     count = int(round(values[problem.model.count_variable]))
     solver = PhaseSolver(fixed, count)
     ver = solver.verify(fixed, values)

@@ -9,6 +9,7 @@ from .design import Design
 from .envelope import StrokeFigures
 from .errors import ProblemError
 from .evaluation import evaluate
+from .regulation import worst_over_range
 from .tabular import Tabular
 
 
@@ -29,6 +30,10 @@ class AnalysisResult(Tabular):
     #: the problem file's constraints checked on this design by the exact evaluator: name,
     #: satisfied, margin (>= 0 when satisfied; negative: by how much it is violated), unit
     constraints: list[dict] = field(default_factory=list)
+    #: with a regulation interval: its ends, and the worst δ and least transmission angle over
+    #: it with their eccentricities (``eccentricity_range, worst_eccentricity, delta,
+    #: angle_eccentricity, min_transmission_angle_deg``)
+    regulation_range: dict | None = None
 
     def summary(self) -> str:
         lengths = ", ".join(f"{k} = {v:g}" for k, v in self.design.items())
@@ -58,6 +63,8 @@ class AnalysisResult(Tabular):
             "chains_min_transmission_angle_deg": self.chains_min_transmission_angle_deg,
             "regulation": self.regulation,
         }
+        if self.regulation_range is not None:
+            out["regulation_range"] = self.regulation_range
         if self.failure:
             out["failure"] = self.failure
         out["constraints"] = self.constraints
@@ -88,6 +95,19 @@ def analyze(problem, values: dict | None = None) -> AnalysisResult:
     ev = evaluate(design, problem.stroke, problem.input_speed, eccentricities, mech.strokes)
     if isinstance(ev.failure, ProblemError):
         raise ev.failure
+    if ev.failure is None and problem.eccentricity_range is not None:
+        # the whole interval, as the solve's verification sees it
+        worst = worst_over_range(design, problem.stroke, problem.input_speed,
+                                 problem.objective.ripple, *problem.eccentricity_range)
+        if worst.failure is not None:
+            ev.failure, ev.failed_eccentricity = worst.failure, worst.failed_eccentricity
+        else:
+            ev.worst, ev.worst_definition = worst, problem.objective.ripple
+            result.regulation_range = {
+                "eccentricity_range": [worst.lower, worst.upper],
+                "worst_eccentricity": worst.eccentricity, "delta": worst.delta,
+                "angle_eccentricity": worst.angle_eccentricity,
+                "min_transmission_angle_deg": worst.min_angle_deg}
     if ev.failure is not None:
         exc = ev.failure
         result.assembles = False
@@ -153,6 +173,14 @@ def format_analysis(result: AnalysisResult, name: str = "") -> str:
                      "mean;")
         lines.append("  ratio = output speed / input speed; the gear ratio i = n_in/n_out is "
                      "1/ratio")
+    r = result.regulation_range
+    if r is not None:
+        lines.append("")
+        lower, upper = r["eccentricity_range"]
+        lines.append(f"over the regulation interval e in [{lower:g}, {upper:g}]: "
+                     f"worst δ = {r['delta']:.6f} at e = {r['worst_eccentricity']:.4f}; least "
+                     f"transmission angle {r['min_transmission_angle_deg']:.2f} deg at e = "
+                     f"{r['angle_eccentricity']:.4f}")
     if result.constraints:
         lines.append("")
         lines.append("constraints of the problem file:")
@@ -166,3 +194,27 @@ def format_analysis(result: AnalysisResult, name: str = "") -> str:
         lines.append(f"{key}: " + ", ".join(f"{k} = {v:.4g}" if isinstance(v, float) else
                                             f"{k} = {v}" for k, v in section.items()))
     return "\n".join(lines)
+
+
+#: eccentricities of ``analyze --out``'s figure when the file lists points: (0, 1] from this
+#: fraction on (the ratio vanishes at 0), where the design assembles
+FIGURE_LEAST_ECCENTRICITY = 0.01
+FIGURE_POINTS = 60
+
+
+def regulation_curve(problem, values: dict | None = None) -> dict:
+    """δ, the ratio and the least transmission angle of the problem's design against e: over
+    the regulation interval, or over (0, 1] where the design assembles when the file lists
+    eccentricities (NaN where it does not); with ``lower``, ``upper`` (the interval or
+    None) and ``listed``. What ``analyze --out`` draws into regulation.png."""
+    from .regulation import curve_over_range
+
+    design = Design.from_problem(problem, values)
+    span = problem.eccentricity_range
+    lower, upper = span if span is not None else (FIGURE_LEAST_ECCENTRICITY, 1.0)
+    es = np.linspace(lower, upper, FIGURE_POINTS)
+    curve = curve_over_range(design, problem.stroke, problem.input_speed,
+                             problem.objective.ripple, es)
+    curve.update(interval=span, listed=tuple(problem.eccentricities),
+                 ripple=problem.objective.ripple)
+    return curve

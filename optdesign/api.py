@@ -23,7 +23,7 @@ from .problem import Problem, problem_from_dict
 from .problem import load_problem as _load_file
 
 __all__ = ["analyze", "as_problem", "load_problem", "pareto", "plot_front", "plot_mechanism",
-           "plot_speeds", "solve"]
+           "plot_speeds", "sensitivities", "solve"]
 
 
 def load_problem(source) -> Problem:
@@ -47,6 +47,17 @@ def analyze(problem, design: Mapping | None = None):
     from .analysis import analyze as _analyze
 
     return _analyze(load_problem(problem), None if design is None else dict(design))
+
+
+def sensitivities(problem, design: Mapping | None = None):
+    """Exact dδ/dl, d(ratio)/dl and d(transmission-angle margin)/dl for every length of the
+    problem's own design, or of ``design``: a
+    :class:`~optdesign.sensitivity.Sensitivities` (``.to_dict()`` is the block of
+    ``result.json``; a :class:`SolveResult` has its best design's as ``.sensitivities``)."""
+    from .sensitivity import sensitivities as _sensitivities
+
+    problem = load_problem(problem)
+    return _sensitivities(problem, problem.start_values() | dict(design or {}))
 
 
 def solve(problem, progress=None):

@@ -27,6 +27,7 @@ COMMANDS = [
     "optdesign.commands.simulate",
     "optdesign.commands.bench",
     "optdesign.commands.pareto",
+    "optdesign.commands.tolerance",
     "optdesign.commands.schema",
 ]
 

@@ -17,6 +17,7 @@ from .design import Design
 from .envelope import StrokeFigures, driving_speeds
 from .errors import AssemblyError, ProblemError
 from .exact import DEFAULT_GRID, Run, exact_figures, search_grid
+from .regulation import RangeWorst, worst_over_range
 
 
 @dataclass
@@ -58,6 +59,10 @@ class Evaluation:
     per_e: list[EccentricityEvaluation] = field(default_factory=list)
     failure: AssemblyError | ProblemError | None = None
     failed_eccentricity: float | None = None
+    #: with a regulation interval: the worst δ (of ``worst_definition``) and least
+    #: transmission angle over the whole interval (:mod:`optdesign.regulation`)
+    worst: RangeWorst | None = None
+    worst_definition: str = "midrange"
 
     @property
     def assembles(self) -> bool:
@@ -85,12 +90,18 @@ class Evaluation:
         return self.figures.ratio
 
     def ripple(self, definition: str, eccentricities) -> float:
-        """Worst δ of the problem's stroke over ``eccentricities``."""
-        return max(self.at(e).figures[self.stroke].ripple(definition) for e in eccentricities)
+        """Worst δ of the problem's stroke over ``eccentricities`` (and over the regulation
+        interval, when it was searched for this definition)."""
+        listed = max(self.at(e).figures[self.stroke].ripple(definition) for e in eccentricities)
+        if self.worst is not None and self.worst_definition == definition:
+            return max(listed, self.worst.delta)
+        return listed
 
     @property
     def min_angle_deg(self) -> float:
-        return min(x.min_angle_deg for x in self.per_e)
+        """Least transmission angle over the evaluated eccentricities (and the interval)."""
+        least = min(x.min_angle_deg for x in self.per_e)
+        return least if self.worst is None else min(least, self.worst.min_angle_deg)
 
 
 def eccentricities_of(problem) -> tuple[float, ...]:
@@ -135,8 +146,41 @@ def evaluate(design: Design, stroke: str, input_speed: float,
     return ev
 
 
-def evaluate_problem(problem, values=None, strokes: tuple[str, ...] | None = None) -> Evaluation:
-    """:func:`evaluate` of the problem's design (or ``values``) at its eccentricities."""
+def evaluate_problem(problem, values=None, strokes: tuple[str, ...] | None = None,
+                     extra: tuple[float, ...] = (), search: bool = True) -> Evaluation:
+    """:func:`evaluate` of the problem's design (or ``values``) at its eccentricities, then at
+    ``extra`` ones (the solve's held interior eccentricities, in order); with a regulation
+    interval (and ``search``), its worst δ and transmission angle are searched too
+    (``Evaluation.worst``)."""
     design = Design.from_problem(problem, values)
-    return evaluate(design, problem.stroke, problem.input_speed, eccentricities_of(problem),
-                    strokes)
+    ev = evaluate(design, problem.stroke, problem.input_speed,
+                  eccentricities_of(problem) + tuple(extra), strokes)
+    if problem.eccentricity_range is not None and search and ev.assembles:
+        worst = _worst_of(problem, design)
+        if worst.failure is not None:
+            ev.failure, ev.failed_eccentricity = worst.failure, worst.failed_eccentricity
+        else:
+            ev.worst, ev.worst_definition = worst, problem.objective.ripple
+    return ev
+
+
+#: the interval searches of the designs evaluated last (a solve verifies one design again
+#: whenever its held eccentricities change): key -> RangeWorst
+_WORST_CACHE: dict = {}
+_WORST_CACHE_SIZE = 32
+
+
+def _worst_of(problem, design: Design) -> RangeWorst:
+    """:func:`~optdesign.regulation.worst_over_range` of ``design`` over the problem's
+    interval, remembered for the last few designs."""
+    key = (problem.mechanism, problem.stroke, problem.input_speed, problem.objective.ripple,
+           problem.eccentricity_range, tuple(sorted(problem.options.items())),
+           tuple(sorted((k, float(v)) for k, v in design.values.items())))
+    worst = _WORST_CACHE.get(key)
+    if worst is None:
+        worst = worst_over_range(design, problem.stroke, problem.input_speed,
+                                 problem.objective.ripple, *problem.eccentricity_range)
+        if len(_WORST_CACHE) >= _WORST_CACHE_SIZE:
+            _WORST_CACHE.pop(next(iter(_WORST_CACHE)))
+        _WORST_CACHE[key] = worst
+    return worst

@@ -37,7 +37,7 @@ class Run:
     curve: int          # index into the stacked curves; the last one is the output at rest
 
 
-class _Curves:
+class Curves:
     """f_c(φ) and f_c'(φ) for every (chain, sign) pair plus the zero curve (output at rest)."""
 
     def __init__(self, design, stroke: str, eccentricity: float):
@@ -91,7 +91,7 @@ def exact_figures(design, stroke: str, input_speed: float, eccentricity: float =
     ``phi`` and ``sampled`` (``Design.sample`` on it) reuse a search grid that was sampled
     already; by default the grid is :func:`search_grid` and is sampled here.
     """
-    curves = _Curves(design, stroke, eccentricity)
+    curves = Curves(design, stroke, eccentricity)
     breaks = sorted({float(b) % TWO_PI for b in design.breakpoints(eccentricity)})
     if phi is None:
         phi = search_grid(design, eccentricity, n_grid)
@@ -131,12 +131,12 @@ def toggles(design, eccentricity: float, phi: np.ndarray,
             if c >= 1.0 - TOGGLE_TOL]
 
 
-def _envelope_at(curves: _Curves, phi: np.ndarray) -> np.ndarray:
+def _envelope_at(curves: Curves, phi: np.ndarray) -> np.ndarray:
     f, _, _ = curves.grid(np.mod(phi, TWO_PI))
     return f.max(axis=0)
 
 
-def _runs(curves: _Curves, phi: np.ndarray, f: np.ndarray) -> list[Run]:
+def _runs(curves: Curves, phi: np.ndarray, f: np.ndarray) -> list[Run]:
     """Hand-over points of the envelope, by Brent's method on f_a - f_b between grid points."""
     active = f.argmax(axis=0)
     n = phi.size
@@ -189,11 +189,19 @@ def _inside(run: Run, phi: np.ndarray) -> np.ndarray:
     return idx[np.argsort(shifted[idx])]
 
 
-def _stationary_values(curves: _Curves, run: Run, phi: np.ndarray, df: np.ndarray):
+def _stationary_values(curves: Curves, run: Run, phi: np.ndarray, df: np.ndarray):
     """Values of the active curve at its stationary points inside the run (f' = 0)."""
+    return np.array([curves.point(x % TWO_PI)[0].max()
+                     for x in stationary_angles(curves, run, phi, df)])
+
+
+def stationary_angles(curves: Curves, run: Run, phi: np.ndarray, df: np.ndarray) -> list:
+    """Crank angles of the active curve's stationary points inside the run (f' = 0), each
+    bracketed on the grid ``phi`` (``df``: every curve's f' there) and found by Brent's
+    method; an angle may exceed 2π where the run wraps."""
     c = run.curve
     if c == curves.m - 1:
-        return np.zeros(0)
+        return []
     idx = _inside(run, phi)
     xs = np.concatenate([[run.start], run.start + np.mod(phi[idx] - run.start, TWO_PI),
                          [run.end]])
@@ -206,12 +214,12 @@ def _stationary_values(curves: _Curves, run: Run, phi: np.ndarray, df: np.ndarra
     out = []
     for i in range(xs.size - 1):
         if ds[i] * ds[i + 1] < 0:
-            x = brentq(slope, xs[i], xs[i + 1], xtol=1e-14, rtol=4 * np.finfo(float).eps)
-            out.append(curves.point(x % TWO_PI)[0].max())
-    return np.array(out)
+            out.append(brentq(slope, xs[i], xs[i + 1], xtol=1e-14,
+                              rtol=4 * np.finfo(float).eps))
+    return out
 
 
-def _increment(curves: _Curves, run: Run, phi: np.ndarray, theta: np.ndarray) -> float:
+def _increment(curves: Curves, run: Run, phi: np.ndarray, theta: np.ndarray) -> float:
     """∫ over the run of the active curve = s·(θ_k(end) - θ_k(start)), unwrapped on the grid."""
     c = run.curve
     if c == curves.m - 1:

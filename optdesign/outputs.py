@@ -119,6 +119,21 @@ def write_simulation(result, out: Path) -> list[Path]:
     return written
 
 
+# --------------------------------------------------------------------------- tolerance
+#: every file ``tolerance`` writes in its folder
+TOLERANCE_FILES = ("tolerance.json", "tolerance.csv", "tolerance.png")
+
+
+def write_tolerance(doc: dict, frame, out: Path) -> list[Path]:
+    """tolerance.json, the Monte Carlo parts as tolerance.csv and their histograms."""
+    from .tolerance.report import plot_tolerance
+
+    csv = frame.to_csv(index=False, float_format="%.10g")
+    return [atomic_write_json(out / "tolerance.json", doc),
+            atomic_write_bytes(out / "tolerance.csv", csv.encode("utf-8")),
+            save_figure(plot_tolerance(frame, doc), out / "tolerance.png", dpi=110)]
+
+
 # --------------------------------------------------------------------------- the others
 def write_accuracy(payload: dict, rows, problem, out: Path, plot: bool = True) -> list[Path]:
     """accuracy.json and accuracy.png of ``optdesign bench accuracy``."""
@@ -137,6 +152,14 @@ def write_driveline(section, path: Path, **marks) -> Path:
     from .driveline.plot import plot_driveline
 
     return save_figure(plot_driveline(section, **marks), path, dpi=120, bbox_inches=None)
+
+
+def write_regulation(curve: dict, worst: dict | None, title: str, out: Path) -> Path:
+    """regulation.png (``analyze --out``): δ and the ratio against the eccentricity."""
+    from .plots import plot_regulation
+
+    return save_figure(plot_regulation(curve, worst, title=title), out / "regulation.png",
+                       dpi=110)
 
 
 def write_curves(curves, title: str, out: Path) -> Path:

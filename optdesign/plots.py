@@ -419,3 +419,35 @@ def _outside(box, frame) -> float:
     """Area of ``box`` outside the axes, weighted so a label never leaves the axes cheaply."""
     inside = _shared(box, frame.x0, frame.y0, frame.x1, frame.y1)
     return 10.0 * (box.width * box.height - inside)
+
+
+# --------------------------------------------------------------------------- regulation
+def plot_regulation(curve: dict, worst: dict | None = None, title: str | None = None):
+    """δ and the ratio of a design against the eccentricity e (``analysis.regulation_curve``):
+    the regulation interval shaded, the listed eccentricities marked, and the worst e of the
+    interval (``worst``: ``AnalysisResult.regulation_range``) with its δ."""
+    plt = pyplot()
+    fig, (ax_d, ax_r) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    e = curve["eccentricity"]
+    ax_d.plot(e, curve["delta"], color="black", lw=1.8)
+    ax_r.plot(e, curve["ratio"], color="tab:blue", lw=1.8)
+    interval = curve.get("interval")
+    for ax in (ax_d, ax_r):
+        if interval is not None:
+            ax.axvspan(*interval, color="tab:orange", alpha=0.12, label="regulation interval")
+        else:
+            for x in curve.get("listed", ()):
+                ax.axvline(x, color="tab:orange", ls="--", lw=0.9)
+        ax.grid(alpha=0.3)
+    if worst is not None:
+        ax_d.plot([worst["worst_eccentricity"]], [worst["delta"]], "o", color="crimson",
+                  label=f"worst: δ = {worst['delta']:.5f} at e = "
+                        f"{worst['worst_eccentricity']:.4f}")
+    if interval is not None or worst is not None:
+        ax_d.legend(fontsize=8)
+    ax_d.set_ylabel(f"δ ({curve.get('ripple', 'midrange')})")
+    ax_r.set_ylabel("ratio (output / input speed)")
+    ax_r.set_xlabel("eccentricity e (fraction of the regulated length)")
+    ax_d.set_title(title or "ripple and ratio against the eccentricity")
+    fig.tight_layout()
+    return fig

@@ -27,9 +27,11 @@ SECTION_PARSERS: dict[str, str] = {
     "driveline": "optdesign.driveline.section:parse_section",
     "dynamics": "optdesign.dynamics.section:parse_section",
     "pareto": "optdesign.pareto.section:parse_section",
+    "tolerances": "optdesign.tolerance.section:parse_section",
 }
 
 RIPPLE_DEFINITIONS = ("midrange", "mean")
+ROBUST_CHOICES = ("none", "worst_case")
 HESSIANS = ("exact", "limited-memory")
 
 # Limits of the values a problem file may give (docs/contract.md, "Limits"); those of the
@@ -99,6 +101,7 @@ class Objective:
     ripple: str = "midrange"            # midrange (paper) | mean (time mean)
     min_ratio: float = 0.0
     max_ripple: float | None = None
+    robust: str = "none"                # none | worst_case (over the tolerances: box)
 
 
 @dataclass(frozen=True)
@@ -157,6 +160,11 @@ OBJECTIVE_KEYS: tuple[Key, ...] = (
     Key("max_ripple", "number", "largest δ allowed", unit="-",
         default=Objective.max_ripple, default_text="none", lower=0, open_lower=True,
         example=0.5, condition="required with minimize: -ratio"),
+    Key("robust", "choice", "none: the nominal design; worst_case: minimise the worst δ over "
+        "the tolerances: box, every part of it assembling and meeting every constraint "
+        "(with minimize: ripple, listed eccentricities and a tolerances: section; "
+        "docs/formulation.md, \"Robust solve\")", default=Objective.robust,
+        choices=ROBUST_CHOICES),
 )
 
 #: constraint keys every mechanism understands; a mechanism declares its own
@@ -189,11 +197,20 @@ CONSTRAINT_KEYS: tuple[Key, ...] = (
 )
 
 REGULATION_KEYS: tuple[Key, ...] = (
-    Key("eccentricity", "list", "the fractions e of the regulated length (l1, L, r1) at "
-        "which δ is computed; the solve holds the worst", unit="-", default=[1.0],
-        item=Key("eccentricity", "number", "a fraction of the regulated length",
-                 lower=MIN_ECCENTRICITY, upper=1.0),
-        min_items=1, max_items=MAX_ECCENTRICITIES),
+    Key("eccentricity", "either", "the fractions e of the regulated length (l1, L, r1) at "
+        "which δ is held: a list (δ computed at each listed e; the solve holds the worst), or "
+        "an interval {lower, upper} (δ, the ripple cap and the transmission angle held at "
+        "every e in it; docs/formulation.md, \"The whole regulation range\")", unit="-",
+        default=[1.0], alternatives=(
+            Key("eccentricity", "list", "the listed fractions", unit="-",
+                item=Key("eccentricity", "number", "a fraction of the regulated length",
+                         lower=MIN_ECCENTRICITY, upper=1.0),
+                min_items=1, max_items=MAX_ECCENTRICITIES),
+            Key("eccentricity", "mapping", "the interval of fractions", keys=(
+                Key("lower", "number", "the least fraction of the interval", unit="-",
+                    default=REQUIRED, lower=MIN_ECCENTRICITY, upper=1.0),
+                Key("upper", "number", "the largest fraction of the interval (above lower)",
+                    unit="-", default=REQUIRED, lower=MIN_ECCENTRICITY, upper=1.0))))),
 )
 
 SOLVER_KEYS: tuple[Key, ...] = (
@@ -242,6 +259,9 @@ class Problem:
     constraints: Constraints = Constraints()
     objective: Objective = Objective()
     eccentricities: tuple[float, ...] = (1.0,)
+    #: ``regulation.eccentricity: {lower, upper}``: δ, the ripple cap and the transmission
+    #: angle held over the whole interval (its ends are also the listed ``eccentricities``)
+    eccentricity_range: tuple[float, float] | None = None
     solver: SolverSettings = SolverSettings()
     sections: Mapping[str, Any] = field(default_factory=dict)
     source: str = "<dict>"
@@ -329,20 +349,23 @@ def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "pro
     options = _read_options(r, top.get("options", {}), mech)
     constraints = _read_constraints(r, top.get("constraints", {}), mech)
     objective = _read_objective(r, top.get("objective", {}))
-    ecc = _read_regulation(r, top.get("regulation", {}))
+    ecc, ecc_range = _read_regulation(r, top.get("regulation", {}))
     solver = _read_solver(r, top.get("solver", {}))
     sections = {}
     for key, target in SECTION_PARSERS.items():
         if key in top:
             module, func = target.split(":")
             sections[key] = getattr(import_module(module), func)(top[key], r.sub(key))
+    if objective.robust == "worst_case":
+        _check_robust(r, objective, ecc_range, sections)
     for key in constraints.extra:
         owner = EXTRA_CONSTRAINT_SECTIONS.get(key)
         if owner is not None and owner not in sections:
             raise r.error(f"constraints.{key}", f"needs a {owner}: section")
     problem = Problem(name=name, mechanism=mechanism_name, input_speed=input_speed,
                       stroke=stroke, design=design, options=options, constraints=constraints,
-                      objective=objective, eccentricities=ecc, solver=solver,
+                      objective=objective, eccentricities=ecc, eccentricity_range=ecc_range,
+                      solver=solver,
                       sections=sections, source=where)
     for section in sections.values():
         if hasattr(section, "check_problem"):
@@ -354,6 +377,21 @@ def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "pro
     except ProblemError as exc:
         raise ProblemError(f"{where}: {exc}") from None
     return problem
+
+
+def _check_robust(r, objective: Objective, ecc_range, sections) -> None:
+    """``objective.robust: worst_case`` needs the box (a tolerances: section), the least-ripple
+    objective and listed eccentricities (a regulation interval's slots are not combined with
+    the scenarios)."""
+    if "tolerances" not in sections:
+        raise r.error("objective.robust", "worst_case needs a tolerances: section (the box "
+                                          "of parts)")
+    if objective.minimize != "ripple":
+        raise r.error("objective.robust", f"worst_case needs minimize: ripple (got "
+                                          f"{objective.minimize})")
+    if ecc_range is not None:
+        raise r.error("objective.robust", "worst_case needs listed eccentricities, not an "
+                                          "interval")
 
 
 def _check_regulated_scale(r, problem: Problem) -> None:
@@ -520,13 +558,31 @@ def _read_objective(r, raw) -> Objective:
     return Objective(**kw)
 
 
-def _read_regulation(r, raw) -> tuple[float, ...]:
+def _read_regulation(r, raw) -> tuple[tuple[float, ...], tuple[float, float] | None]:
+    """(the listed eccentricities, the interval or None). An interval's ends are its listed
+    eccentricities."""
     raw = r.mapping(raw, "regulation")
     r.known_keys(raw, "regulation", names(REGULATION_KEYS))
-    declared = REGULATION_KEYS[0]
-    values = raw.get("eccentricity", declared.default)
+    declared, interval = REGULATION_KEYS[0].alternatives
+    values = raw.get("eccentricity", REGULATION_KEYS[0].default)
+    if isinstance(values, dict):
+        r.known_keys(values, "regulation.eccentricity", names(interval.keys))
+        ends = []
+        for key in interval.keys:
+            path = f"regulation.eccentricity.{key.name}"
+            if key.name not in values:
+                raise r.error(path, "is required (an interval {lower, upper} of fractions "
+                                    "in (0, 1])")
+            ends.append(key.read(r, values[key.name], path))
+        lower, upper = ends
+        if not upper > lower:
+            raise r.error("regulation.eccentricity.upper",
+                          f"must exceed lower (got {upper:g} <= {lower:g}); one fraction is "
+                          f"a list, eccentricity: [{upper:g}]")
+        return (lower, upper), (lower, upper)
     if not isinstance(values, list) or not values:
-        raise r.error("regulation.eccentricity", "must be a non-empty list of fractions in (0, 1]")
+        raise r.error("regulation.eccentricity", "must be a non-empty list of fractions in "
+                                                 "(0, 1] or an interval {lower, upper}")
     if len(values) > declared.max_items:
         raise r.error("regulation.eccentricity", f"must list at most {declared.max_items} "
                                                  f"fractions (got {len(values)})")
@@ -539,7 +595,7 @@ def _read_regulation(r, raw) -> tuple[float, ...]:
             raise r.error("regulation.eccentricity", f"fractions must be at least "
                                                      f"{declared.item.lower:g} (got {e:g})")
         out.append(e)
-    return tuple(out)
+    return tuple(out), None
 
 
 def _read_solver(r, raw) -> SolverSettings:

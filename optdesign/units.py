@@ -44,6 +44,14 @@ UNITS: dict[str, str] = {
     "ratio_upper": RATIO_OF_SPEEDS,
     "eccentricity": "- (fraction of the regulated length)",
     "eccentricities": "- (fractions of the regulated length)",
+    "eccentricity_range": "- (fractions of the regulated length: lower, upper)",
+    "worst_eccentricity": "- (fraction of the regulated length where delta is largest over "
+                          "the regulation interval)",
+    "worst_case_delta": "- (the largest delta over the tolerance box: a robust solve's "
+                        "objective)",
+    "worst_case_min_transmission_angle_deg": "deg (the least over the tolerance box)",
+    "angle_eccentricity": "- (fraction of the regulated length where the transmission angle "
+                          "is least over the regulation interval)",
     # the design and the checks
     "design": DESIGN_UNIT, "start": DESIGN_UNIT,
     "pin_radius": "mm (l2 - l2_prime)",
@@ -58,8 +66,26 @@ UNITS: dict[str, str] = {
     "designs": COUNT, "passed_filters": COUNT, "basins": COUNT, "polished": COUNT,
     "distinct_optima": COUNT,
     "critical_distance": "- (in the box scaled to [0, 1] per free length)",
+    # sensitivities of an optimum (optdesign.sensitivity): {length: derivative}
+    "d_delta_d_length_per_mm": "1/mm (d delta / d length, per design length)",
+    "d_ratio_d_length_per_mm": "1/mm (d ratio / d length at e = 1, per design length)",
+    "d_transmission_angle_margin_d_length_deg_per_mm":
+        "deg/mm (d (least transmission angle - min_transmission_angle_deg) / d length)",
     "nlp_samples": COUNT, "nlp_smoothing": "- (rho, per unit of omega/omega1)",
     "exact_grid": COUNT, "length_relative": "- (relative)",
+    # tolerance (optdesign.tolerance): the Monte Carlo's distributions, one unit each
+    "delta_distribution": "- (delta of the parts: mean, std, min, max, percentiles p1 .. p99)",
+    "ratio_distribution": RATIO_OF_SPEEDS + " (of the parts: mean, std, min, max, percentiles)",
+    "mu_min_deg_distribution": "deg (least transmission angle of the parts: mean, std, min, "
+                               "max, percentiles)",
+    "nominal_delta": "- (delta of the nominal design)", "exact_evaluations": COUNT,
+    "parts": COUNT, "crank_samples": COUNT, "k": "- (sigma = tolerance / k)",
+    "seed": "- (seed of the sample)",
+    "share_not_assembling": "- (share of the parts)",
+    "share_below_min_transmission_angle": "- (share of the parts)",
+    "share_below_min_ratio": "- (share of the parts)",
+    "share_above_max_ripple": "- (share of the parts)",
+    "share_rejected": "- (share of the parts: not assembling or below the angle)",
     # pareto
     "epsilon": RATIO_OF_SPEEDS + ", the ratio bound of the point's solve",
     "hypervolume": "- (normalised objectives)", "spacing": "- (normalised objectives)",
@@ -67,6 +93,8 @@ UNITS: dict[str, str] = {
     "knee": "- (row index)", "index": "- (row index)", "key": "- (phase count, point index)",
     "n_points": COUNT, "points": COUNT, "counts": "- (phase counts)", "tries": COUNT,
     "resumed_points": COUNT, "workers": COUNT,
+    "round": "- (refinement round; 0: the uniform pass)", "merged": COUNT,
+    "max_gap": "- (normalised objectives)", "max_points": COUNT,
     # bench accuracy
     "samples": COUNT, "smoothing": "- (rho, per unit of omega/omega1)",
     "delta_error": "- (absolute)", "delta_signed": "- (delta - reference delta)",
@@ -92,7 +120,10 @@ SUFFIX_UNITS: dict[str, str] = {
 }
 
 #: mappings whose numbers share one unit: named once, not entered
-OPAQUE = frozenset({"timings", "timings_s", "counters"})
+OPAQUE = frozenset({"timings", "timings_s", "counters", "delta_distribution",
+                    "ratio_distribution", "mu_min_deg_distribution", "d_delta_d_length_per_mm",
+                    "d_ratio_d_length_per_mm",
+                    "d_transmission_angle_margin_d_length_deg_per_mm"})
 
 
 def unit_of(key: str, variables: Mapping[str, str] | None = None) -> str | None:

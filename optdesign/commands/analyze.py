@@ -6,6 +6,8 @@ def add_parser(sub) -> None:
     p = sub.add_parser("analyze", help="evaluate the problem's design exactly")
     p.add_argument("problem", help="problem file (YAML)")
     p.add_argument("--json", action="store_true", help="print the contract's JSON")
+    p.add_argument("--out", help="also draw regulation.png, δ and the ratio against the "
+                                 "eccentricity, into this directory")
     p.set_defaults(run=run)
 
 
@@ -15,9 +17,21 @@ def run(args) -> int:
     from ..problem import load_problem
 
     problem = load_problem(args.problem)
+    out = None
+    if args.out is not None:
+        from ..output_checks import prepare_out
+        out = prepare_out(args.out, problem.name, files=("regulation.png",))
     result = analyze(problem)
     if args.json:
         print(json_text(result.to_dict()))
     else:
         print(format_analysis(result, problem.name))
+    if out is not None and result.assembles:
+        from ..analysis import regulation_curve
+        from ..outputs import write_regulation
+
+        path = write_regulation(regulation_curve(problem), result.regulation_range,
+                                f"{problem.name}: δ and ratio against e", out)
+        if not args.json:
+            print(f"wrote {path}")
     return 0 if result.assembles else 1

@@ -5,7 +5,10 @@ start, refinement and Pareto point; the box is screened (:mod:`optdesign.solve.s
 and the best basins are polished by IPOPT; every optimum is re-verified exactly
 (:mod:`optdesign.solve.verify`) and re-solved while its exact structure disagrees with the
 NLP's (hand-over order, an angle on its window, the transmission angle dipping between
-samples). The best verified design wins.
+samples), while the worst eccentricity inside a regulation interval is not held (it is then
+held in an eccentricity slot, :func:`next_held`), and in a robust solve while the tolerance
+box's worst parts are not held (scenario slots, :mod:`optdesign.solve.robust`). The best
+verified design wins.
 """
 from __future__ import annotations
 
@@ -17,11 +20,13 @@ import numpy as np
 
 from ..criteria import objective_of
 from ..mechanisms import STROKE_SIGNS
+from ..sensitivity import sensitivity_record
 from .accuracy import solve_accuracy
-from .nlp import SECONDARY_BUDGET, PhaseNLP
+from .nlp import SECONDARY_BUDGET, Held, PhaseNLP, is_robust
 from .result import PhaseResult, SolveResult, StartRecord
+from .robust import next_scenarios, robust_verdict, worst_cases
 from .screening import line_seeds, screen
-from .verify import Verification, start_guess, verify
+from .verify import TOL_ANGLE_DEG, Verification, start_guess, verify
 
 SUCCESS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 #: the status of a run stopped because it entered a known optimum's neighbourhood
@@ -31,6 +36,14 @@ STALLED = "Stalled_Infeasible"
 #: the status of a secondary basin's polish stopped at its budget (nlp.SECONDARY_BUDGET)
 EXHAUSTED = "Secondary_Budget_Exhausted"
 MAX_REFINEMENTS = 4
+#: re-solves with new held eccentricities (a regulation interval), besides MAX_REFINEMENTS
+MAX_REGULATION_STEPS = 6
+#: the worst δ inside the interval may exceed the held eccentricities' worst by this much
+REGULATION_TOL = 1e-8
+#: a new worst eccentricity this close (share of the interval) to a held one moves that slot
+SAME_SLOT = 0.05
+#: re-solves with new scenario parts (a robust solve), besides MAX_REFINEMENTS
+MAX_ROBUST_STEPS = 6
 ANGLE_SAFETY_DEG = 0.01
 #: two polished optima are one basin when their designs differ by less than this (relative
 #: to the box) and their objectives by less than SAME_KEY_REL
@@ -97,9 +110,10 @@ class PhaseSolver:
         self._nlps[nlp.slots] = nlp
         return nlp
 
-    def verify(self, problem, values) -> Verification:
+    def verify(self, problem, values, held: Held | None = None,
+               search: bool = True) -> Verification:
         with self.timings.stage("verification"):
-            return verify(problem, values)
+            return verify(problem, values, held, search)
 
     def solve_from(self, values: dict, min_ratio=None, max_ripple=None,
                    ver: Verification | None = None, secondary: bool = False) -> Outcome:
@@ -115,14 +129,25 @@ class PhaseSolver:
                           max_ripple=problem.objective.max_ripple if max_ripple is None
                           else max_ripple)
             problem = replace(problem, objective=obj)
-        ver = ver or self.verify(problem, values)
+        # a start is checked at the listed eccentricities only; the first polish's result is
+        # searched over the whole regulation interval
+        ver = ver or self.verify(problem, values, search=False)
         start, t0 = dict(values), time.perf_counter()
+        robust = is_robust(problem)
+        if robust and ver.sequences and not any(ver.held.scenario_active):
+            # the nominal and the start's worst parts (tolerance analysis) to begin with
+            cases, corners = self.worst_cases(problem, values)
+            seeded = next_scenarios(problem, ver.held, cases, None, corners)
+            ver = self.verify(problem, values, seeded, search=False)
+        held = ver.held
         # The NLP holds the worst transmission angle at exact points: no margin to start with;
         # a dip the exact check still finds tightens the bound by the deficit.
         iterations, status, surrogate, multiplier, note = 0, "not run", None, None, ""
         active: list = []
         tightening, hessian = 0.0, problem.solver.hessian
-        for _ in range(MAX_REFINEMENTS):
+        refinements = regulation_steps = robust_steps = 0
+        while refinements < MAX_REFINEMENTS:
+            refinements += 1
             if not ver.sequences:
                 note = ver.message
                 break
@@ -132,7 +157,7 @@ class PhaseSolver:
                                                      run.multiplier, run.active)
             iterations += run.iterations
             trial = values | run.lengths
-            new = self.verify(problem, trial)
+            new = self.verify(problem, trial, held)
             if status == "Maximum_Iterations_Exceeded" and hessian == "limited-memory" \
                     and not secondary:
                 # The quasi-Newton run stalled: once more from the same start with CasADi's
@@ -154,12 +179,38 @@ class PhaseSolver:
                 values, ver = (trial, new) if new.sequences else (values, ver)
                 break
             given, (values, ver) = ver.sequences, (trial, new)
+            moved = next_held(problem, ver)
+            if moved != held:
+                if regulation_steps < MAX_REGULATION_STEPS:
+                    # the worst inside the regulation interval is not held: hold it (a
+                    # parameter of the NLP) and re-solve from here
+                    regulation_steps += 1
+                    refinements -= 1
+                    held = moved
+                    ver = self.verify(problem, values, held)
+                    continue
+                note = (f"the worst eccentricity {ver.worst_eccentricity:g} of the interval "
+                        f"still moved after {MAX_REGULATION_STEPS} re-solves")
             if "transmission_angle" in ver.violations:
                 tightening += ver.violations["transmission_angle"] + ANGLE_SAFETY_DEG
                 continue
             if not _same_cycles(ver.sequences, given) or run.at_window:
                 continue        # hand-overs changed order, or an angle ran to its window
+            if robust:
+                # the tolerance box's worst parts of this optimum: a part rougher than the
+                # bound t, or one that breaks the angle, becomes a scenario; re-solve
+                ver.worst_cases, ver.corners = self.worst_cases(problem, values)
+                grown = next_scenarios(problem, held, ver.worst_cases, surrogate, ver.corners)
+                if grown != held and robust_steps < MAX_ROBUST_STEPS:
+                    robust_steps += 1
+                    refinements -= 1
+                    held = grown
+                    ver = self.verify(problem, values, held)
+                    continue
             break
+        if robust:
+            with self.timings.stage("verification"):
+                robust_verdict(problem, values, ver)
         record = StartRecord(start=start, ipopt_status=status, iterations=iterations,
                              time_s=time.perf_counter() - t0,
                              feasible=bool(ver.feasible and status in SUCCESS),
@@ -167,15 +218,20 @@ class PhaseSolver:
                              active=active if status in SUCCESS else [])
         return Outcome(record, ver, values, surrogate)
 
+    def worst_cases(self, problem, values) -> tuple:
+        """The tolerance analysis of ``values`` (:func:`optdesign.solve.robust.worst_cases`)."""
+        with self.timings.stage("verification"):
+            return worst_cases(problem, values)
+
     def _ipopt(self, problem, ver: Verification, tightening: float, hessian: str,
                budget: int | None = None) -> "_Run":
         """One IPOPT run on the NLP from the verified design ``ver`` (stopped after ``budget``
         iterations when one is given)."""
         nlp = self.nlp(ver.sequences)
         guess = start_guess(nlp, ver)
-        lbx, ubx = nlp.bounds(guess, ver.sequences)
-        params = nlp.parameters(ver.sequences)
-        lbg, ubg = nlp.constraint_bounds(problem, ver.sequences, tightening)
+        lbx, ubx = nlp.bounds(guess, ver.sequences, ver.held)
+        params = nlp.parameters(ver.sequences, ver.held)
+        lbg, ubg = nlp.constraint_bounds(problem, ver.sequences, tightening, ver.held)
         with self.timings.stage("build"):
             solver = nlp.solver(hessian)
         nlp.watch.start([np.array([v[k] for k in nlp.free]) / nlp.scale for v in self.avoid],
@@ -190,7 +246,7 @@ class PhaseSolver:
             EXHAUSTED if nlp.watch.exhausted else stats["return_status"]
         return _Run(status=status,
                     iterations=int(stats["iter_count"]),
-                    lengths=nlp.lengths_of(x), surrogate=nlp.worst_ripple(x, params),
+                    lengths=nlp.lengths_of(x), surrogate=nlp.worst_ripple(x, params, ver.held),
                     multiplier=nlp.multiplier(sol["lam_g"], "min_ratio"),
                     at_window=nlp.at_window_bound(x, lbx, ubx),
                     binding="" if joined else nlp.binding(np.array(sol["g"]).ravel(), lbg, ubg),
@@ -221,6 +277,7 @@ class _Polishing:
         self.best: Outcome | None = None
         self.optima: list[Outcome] = []
         self.polished = 0
+        self.improved_at = 0          # the polish that last improved on the best
 
     def polish(self, values: dict) -> Outcome:
         self.solver.avoid = [o.values for o in self.optima]
@@ -238,13 +295,26 @@ class _Polishing:
             if not any(_same_optimum(self.problem, outcome, o) for o in self.optima):
                 self.optima.append(outcome)
             if self.best is None or outcome.verification.key < self.best.verification.key:
+                if self.best is None or not _same_optimum(self.problem, outcome, self.best):
+                    self.improved_at = self.polished
                 self.best = outcome
         return outcome
+
+    def apart(self) -> bool:
+        """Whether the polishes so far ended apart: more than one optimum, or a polish that
+        reached none (stalled, out of budget, infeasible). A count whose best basins lead to
+        different places is multimodal, and its next basins are worth polishing."""
+        return len(self.optima) > 1 or any(
+            not r.feasible or r.ipopt_status not in SUCCESS + (JOINED,)
+            for r in self.result.starts)
 
     def basins(self, seeds) -> None:
         """Polish the best basins' seeds: `basins` of them once one is feasible; with none
         feasible, on until `agree + 1` IPOPT verdicts of local infeasibility on one constraint
-        (or `starts` polishes)."""
+        (or `starts` polishes). Where the polishes end :meth:`apart`, on through the next
+        basins until `basins` polishes in a row bring no better optimum (the screening's rank
+        of a basin is the sampled value of its seed, not of its bottom, so the best basin may
+        rank third or fourth)."""
         s = self.problem.solver
         seeds = list(seeds)
         together = min(s.basins, s.starts, len(seeds), self.workers)
@@ -257,9 +327,12 @@ class _Polishing:
                         max(getattr(t, stage) for _, t in runs))
             seeds = seeds[together:]
         for seed in seeds:
-            if self.polished >= s.starts or (self.best is not None and
-                                             self.polished >= s.basins):
+            if self.polished >= s.starts:
                 return
+            if self.best is not None and self.polished >= s.basins and (
+                    not self.apart() or
+                    self.polished - max(self.improved_at, s.basins) >= s.basins):
+                return           # agreed, or `basins` more polishes found nothing better
             outcome = self.polish(seed.values)
             verdicts = [r.note for r in self.result.starts
                         if r.ipopt_status == "Infeasible_Problem_Detected"]
@@ -363,6 +436,51 @@ def _no_optimum(result: PhaseResult) -> PhaseResult:
     return result
 
 
+def next_held(problem, ver: Verification) -> Held:
+    """The eccentricity slots for the next solve of a design verified with ``ver.held``: the
+    same, unless the worst δ inside the regulation interval exceeds the worst at the held
+    eccentricities (the listed ones and the active slots) by more than REGULATION_TOL, or the
+    least transmission angle inside it breaks the bound where no held eccentricity sees it;
+    then that eccentricity is held: in the slot of a held one close to it, else in an idle
+    slot, else in place of the held slot of least δ."""
+    held, ev = ver.held, ver.evaluation
+    if not held.eccentricities or ev is None or ev.worst is None:
+        return held
+    worst, definition = ev.worst, problem.objective.ripple
+    lower, upper = problem.eccentricity_range
+    n_fixed = len(ev.per_e) - len(held.eccentricities)
+    rows = [(x.eccentricity, x.figures[ev.stroke].ripple(definition), x.min_angle_deg)
+            for i, x in enumerate(ev.per_e)
+            if (i < n_fixed and x.eccentricity in problem.eccentricities)
+            or (i >= n_fixed and held.active[i - n_fixed])]
+    wanted = []
+    if worst.interior(worst.eccentricity) and \
+            worst.delta > max(r[1] for r in rows) + REGULATION_TOL:
+        wanted.append((worst.eccentricity, worst.delta))
+    bound = problem.constraints.min_transmission_angle_deg
+    if worst.interior(worst.angle_eccentricity) and \
+            worst.min_angle_deg < bound - TOL_ANGLE_DEG and \
+            worst.min_angle_deg < min(r[2] for r in rows) - TOL_ANGLE_DEG:
+        wanted.append((worst.angle_eccentricity, worst.points[worst.angle_eccentricity][0]))
+    if not wanted:
+        return held
+    es, active = list(held.eccentricities), list(held.active)
+    deltas = [ev.per_e[n_fixed + j].figures[ev.stroke].ripple(definition)
+              for j in range(len(es))]
+    placed: set[int] = set()
+    for e, delta in wanted:
+        near = [j for j in range(len(es)) if active[j] and j not in placed
+                and abs(es[j] - e) <= SAME_SLOT * (upper - lower)]
+        idle = [j for j in range(len(es)) if not active[j] and j not in placed]
+        others = sorted((j for j in range(len(es)) if j not in placed), key=lambda j: deltas[j])
+        j = (near or idle or others or [None])[0]
+        if j is None:
+            break
+        es[j], active[j], deltas[j] = e, True, delta
+        placed.add(j)
+    return Held(tuple(es), tuple(active))
+
+
 def _same_cycles(a, b) -> bool:
     """The hand-over sequences of every eccentricity are the same cycles: equal up to where
     the turn starts (a hand-over that moved across φ = 0 changes the first curve of the
@@ -408,9 +526,17 @@ def _fill(result: PhaseResult, problem, outcome: Outcome) -> PhaseResult:
     result.ratio = ver.ratio
     result.min_transmission_angle_deg = ver.min_angle_deg
     result.surrogate_delta = outcome.surrogate
-    result.surrogate_gap = None if outcome.surrogate is None else outcome.surrogate - ver.delta
+    # the NLP's t bounds the worst held part: compared with the box's worst in a robust solve
+    reference = ver.worst_cases[0].value if ver.worst_cases else ver.delta
+    result.surrogate_gap = None if outcome.surrogate is None else outcome.surrogate - reference
     result.regulation = ver.regulation()
+    result.worst_eccentricity = ver.worst_eccentricity
+    if ver.worst_cases:
+        ripple, angle = ver.worst_cases
+        result.worst_case_delta = ripple.value
+        result.worst_case_min_transmission_angle_deg = angle.value
     result.active = outcome.record.active
+    result.sensitivities = sensitivity_record(problem, design, ver.evaluation)
     result.message = ""
     return result
 
@@ -426,7 +552,10 @@ def solve(problem, progress=None) -> SolveResult:
             progress()
     ok = [p for p in per_phase if p.status == "optimal"]
     objective = objective_of(problem)
-    best = min(ok, key=lambda p: objective.rank(p.delta, p.ratio), default=None)
+    if is_robust(problem):      # a robust solve ranks by the tolerance box's worst δ
+        best = min(ok, key=lambda p: p.worst_case_delta, default=None)
+    else:
+        best = min(ok, key=lambda p: objective.rank(p.delta, p.ratio), default=None)
     if best:
         status, message = "optimal", ""
     else:
@@ -443,13 +572,17 @@ def solve(problem, progress=None) -> SolveResult:
         delta=best.delta if best else None,
         ratio=best.ratio if best else None,
         min_transmission_angle_deg=best.min_transmission_angle_deg if best else None,
+        worst_eccentricity=best.worst_eccentricity if best else None,
+        worst_case_delta=best.worst_case_delta if best else None,
         solve_time_s=time.perf_counter() - t0,
         iterations=sum(p.iterations for p in per_phase),
         per_phase=per_phase,
         objective={"minimize": problem.objective.minimize, "ripple": problem.objective.ripple,
                    "min_ratio": problem.objective.min_ratio,
                    "max_ripple": problem.objective.max_ripple,
-                   "eccentricities": list(problem.eccentricities)},
+                   "eccentricities": list(problem.eccentricities),
+                   **({"eccentricity_range": list(problem.eccentricity_range)}
+                      if problem.eccentricity_range is not None else {})},
         accuracy=accuracy, active=best.active if best else [],
         message=message, stroke=problem.stroke, mechanism=problem.mechanism,
         input_speed=problem.input_speed, timings_s=timings.to_dict())

@@ -23,6 +23,12 @@ never the graph; a sequence longer than ``M`` slots rebuilds with more slots (ra
 starts at the curve count, one hand-over into each). Every constraint's bounds come from its criterion
 (:mod:`optdesign.criteria`) at each solve.
 
+A regulation interval (``regulation: {eccentricity: {lower, upper}}``) adds
+:data:`ECCENTRICITY_SLOTS` eccentricity blocks whose e is a parameter (the regulated length × e
+enters the kinematics): the driver holds the worst interior eccentricities of the exact check
+there, like a hand-over, and moves them without rebuilding; an idle slot duplicates an end,
+its variables fixed and its rows free (:class:`Held`).
+
 Construction (chosen by ``benchmarks/solve_scaling.py``): the mechanism's per-angle SX
 function and a per-sample SX function (cos²μ and the smooth maximum) are ``map``-ped over the
 samples and points inside an MX graph; CasADi differentiates the mapped functions as mapped
@@ -31,7 +37,7 @@ derivatives, so the build costs one chain's derivatives, not N·n of them.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import casadi as ca
 import numpy as np
@@ -95,6 +101,46 @@ class Quantities:
     worst_ripple: ca.MX             # epigraph variable t >= δ_e for every listed e
     peak_speed: ca.MX               # ω_max at e = 1, rad/s
     cos_mu_sq: dict                 # eccentricity tag -> cos²μ of every chain at its extremes
+
+
+#: parameterised eccentricity slots of a problem with a regulation interval: the worst interior
+#: eccentricities, held like listed ones; each slot's e is a parameter, so moving it never
+#: rebuilds the NLP (docs/formulation.md, "The whole regulation range")
+ECCENTRICITY_SLOTS = 2
+#: parameterised scenario slots of a robust solve (``objective.robust: worst_case``): parts of
+#: the tolerance box, each the design's lengths plus an offset vector that is a parameter
+SCENARIO_SLOTS = 4
+
+
+@dataclass(frozen=True)
+class Held:
+    """The eccentricity slots of one solve: each slot's e and whether it is held. An idle
+    slot duplicates an end of the interval, with its variables fixed and its rows free."""
+
+    eccentricities: tuple[float, ...] = ()
+    active: tuple[bool, ...] = ()
+    #: a robust solve's scenario slots: each part's length offsets (mm, the mechanism's
+    #: lengths in order) and whether it is held; an idle scenario is the nominal design
+    offsets: tuple[tuple[float, ...], ...] = ()
+    scenario_active: tuple[bool, ...] = ()
+
+    @classmethod
+    def idle(cls, problem) -> "Held":
+        """Every slot idle (at the interval's upper end; scenarios at the nominal); none
+        without an interval or a robust objective."""
+        out = cls()
+        if problem.eccentricity_range is not None:
+            upper = problem.eccentricity_range[1]
+            out = cls((upper,) * ECCENTRICITY_SLOTS, (False,) * ECCENTRICITY_SLOTS)
+        if is_robust(problem):
+            zero = (0.0,) * len(problem.model.lengths)
+            out = replace(out, offsets=(zero,) * SCENARIO_SLOTS,
+                          scenario_active=(False,) * SCENARIO_SLOTS)
+        return out
+
+    def held(self) -> tuple[float, ...]:
+        """The eccentricities of the active slots."""
+        return tuple(e for e, a in zip(self.eccentricities, self.active) if a)
 
 
 #: a secondary basin's run still this infeasible (largest constraint violation, the rows' own
@@ -220,6 +266,21 @@ def tag_of(e: float) -> str:
     return f"e{e:g}"
 
 
+def is_robust(problem) -> bool:
+    """A robust solve: the worst δ over the tolerance box, every part feasible."""
+    return getattr(problem.objective, "robust", "none") == "worst_case"
+
+
+def scenario_tag(j: int) -> str:
+    """The name of scenario slot j (its criterion rows end in ``[s{j}]``)."""
+    return f"s{j}"
+
+
+def slot_tag(j: int) -> str:
+    """The name of eccentricity slot j in the NLP's blocks (its e is a parameter)."""
+    return f"slot{j}"
+
+
 class PhaseNLP:
     """The NLP of one phase count; ``slots`` hand-over slots per eccentricity.
 
@@ -243,6 +304,14 @@ class PhaseNLP:
         self.slots = slots or self.n_curves
         self.eccs = eccentricities_of(problem)
         self.listed = [i for i, e in enumerate(self.eccs) if e in problem.eccentricities]
+        self.n_slots = ECCENTRICITY_SLOTS if problem.eccentricity_range is not None else 0
+        #: the eccentricity blocks in order: e = 1 and the listed ones, then the slots
+        self.tags = [tag_of(e) for e in self.eccs] + [slot_tag(j) for j in range(self.n_slots)]
+        self.n_scenarios = SCENARIO_SLOTS if is_robust(problem) else 0
+        #: per scenario, its eccentricity blocks (after the nominal's and the slots')
+        self.scenario_tags = [[f"{tag_of(e)}_{scenario_tag(j)}" for e in self.eccs]
+                              for j in range(self.n_scenarios)]
+        self.tags += [t for tags in self.scenario_tags for t in tags]
         self.phi = np.linspace(0.0, 2 * math.pi, problem.solver.samples, endpoint=False)
         self.has_mu = model.has_transmission_angle(count, tuple(sorted(problem.options.items())))
         self.criteria = constraints_of(problem)
@@ -310,15 +379,18 @@ class PhaseNLP:
                      self._slot_function(fn).map(self.slots))
         ripples, means, peaks, cos_sq = [], [], [], {}
         self._derived: dict[str, ca.MX] = {}
-        for e in self.eccs:
+        slots = [b.parameter(f"eccentricity_{slot_tag(j)}", 1) for j in range(self.n_slots)]
+        for tag, e in zip(self.tags, list(self.eccs) + slots):      # the nominal's blocks
             pvec = ca.vertcat(*[lengths[k] * (e if k == self.model.regulating_variable else 1)
                                 for k in self.model.lengths])
-            ripple, mean, peak, cos_sq[tag_of(e)] = self._eccentricity(b, e, pvec, functions)
+            ripple, mean, peak, cos_sq[tag] = self._eccentricity(b, tag, e, pvec, functions)
             ripples.append(ripple)
             means.append(mean)
             peaks.append(peak)
         t = b.variable("worst_ripple", 1)
         b.row("ripple_epigraph", ca.vertcat(*[t - ripples[i] for i in self.listed]))
+        if self.n_slots:            # the held interior eccentricities (free rows when idle)
+            b.row("ripple_epigraph_slots", ca.vertcat(*[t - r for r in ripples[len(self.eccs):]]))
         q = Quantities(lengths=lengths, ratio=means[0], worst_ripple=t,
                        peak_speed=peaks[0] * P.input_speed, cos_mu_sq=cos_sq)
         self._criterion_blocks = []
@@ -326,6 +398,29 @@ class PhaseNLP:
             for name, expr in criterion.rows(q):
                 b.row(name, ca.vertcat(expr))
                 self._criterion_blocks.append((name, criterion))
+        # Scenarios: the same blocks for a part of the tolerance box (lengths + offsets, a
+        # parameter), under the same epigraph t, with every constraint row again.
+        for j in range(self.n_scenarios):
+            offsets = b.parameter(f"offsets_{scenario_tag(j)}", len(self.model.lengths))
+            part = {k: lengths[k] + offsets[i] for i, k in enumerate(self.model.lengths)}
+            first, sq = len(ripples), {}
+            for tag, e in zip(self.scenario_tags[j], self.eccs):
+                pvec = ca.vertcat(*[part[k] * (e if k == self.model.regulating_variable else 1)
+                                    for k in self.model.lengths])
+                ripple, mean, peak, sq[tag] = self._eccentricity(b, tag, e, pvec, functions)
+                ripples.append(ripple)
+                means.append(mean)
+                peaks.append(peak)
+            b.row(f"ripple_epigraph[{scenario_tag(j)}]",
+                  ca.vertcat(*[t - ripples[first + i] for i in self.listed]))
+            qj = Quantities(lengths=part, ratio=means[first], worst_ripple=t,
+                            peak_speed=peaks[first] * P.input_speed, cos_mu_sq=sq)
+            for criterion in self.criteria:
+                for name, expr in criterion.rows(qj):
+                    if not name.endswith(f"_{scenario_tag(j)}]"):
+                        name = f"{name}[{scenario_tag(j)}]"
+                    b.row(name, ca.vertcat(expr))
+                    self._criterion_blocks.append((name, criterion))
         self.x_sym, self.p_sym = ca.vertcat(*b.x), ca.vertcat(*b.p)
         #: the auxiliary variables' values as functions of the others, to start them on
         self._fill = ca.Function("fill", [self.x_sym, self.p_sym], list(self._derived.values()))
@@ -336,14 +431,15 @@ class PhaseNLP:
                                      [ca.vertcat(*ripples), ca.vertcat(*means),
                                       ca.vertcat(*peaks)])
 
-    def _eccentricity(self, b: "_Builder", e: float, pvec, functions):
-        """The variables and rows of one eccentricity: (δ_e, mean_e, w_hi, cos²μ rows).
+    def _eccentricity(self, b: "_Builder", tag: str, e, pvec, functions):
+        """The variables and rows of one eccentricity block ``tag``: (δ_e, mean_e, w_hi, cos²μ
+        rows). ``e`` is a number, or a parameter (an eccentricity slot).
 
         Speeds are in units of e·ω1: they shrink like e, and at e = 1e-6 they would sit below
         IPOPT's tolerances (ripple and ratio are ratios, so the unit cancels).
         """
         sample_map, points, slot_map = functions
-        tag, C, M = tag_of(e), self.n_curves, self.slots
+        C, M = self.n_curves, self.slots
         w = b.variable(f"w_{tag}", 2)
         w_hi, w_lo = w[0], w[1]
         cos_mu_sq, lse, f_samples = sample_map(self.phi[None, :], pvec, 1.0 / e)
@@ -410,14 +506,33 @@ class PhaseNLP:
         return self._solvers[hessian]
 
     # ------------------------------------------------------------------ per solve
-    def parameters(self, sequences) -> np.ndarray:
-        """The fixed lengths and the slots' selections for one hand-over sequence per e."""
+    def _held(self, held: Held | None) -> Held:
+        return held if held is not None else Held.idle(self.problem)
+
+    def idle_tags(self, held: Held | None) -> set[str]:
+        """The tags of the eccentricity and scenario slots not held in this solve (a
+        scenario's: its own and those of its eccentricity blocks)."""
+        held = self._held(held)
+        out = {slot_tag(j) for j in range(self.n_slots) if not held.active[j]}
+        for j in range(self.n_scenarios):
+            if not held.scenario_active[j]:
+                out |= {scenario_tag(j), *self.scenario_tags[j]}
+        return out
+
+    def parameters(self, sequences, held: Held | None = None) -> np.ndarray:
+        """The fixed lengths, the eccentricity slots' e (``held``; every slot idle by
+        default) and the hand-over slots' selections for one hand-over sequence per
+        eccentricity block (:attr:`tags`: e = 1, the listed ones, then the slots)."""
         P, L = self.problem, self.layout
         p = np.zeros(self.n_p)
         p[L.find(L.p, "fixed")] = [P.design[k].value for k in self.fixed]
+        for j, e in enumerate(self._held(held).eccentricities[:self.n_slots]):
+            p[L.find(L.p, f"eccentricity_{slot_tag(j)}")] = e
+        for j, offsets in enumerate(self._held(held).offsets[:self.n_scenarios]):
+            p[L.find(L.p, f"offsets_{scenario_tag(j)}")] = offsets
         C, M = self.n_curves, self.slots
-        for e, seq in zip(self.eccs, sequences):
-            tag, m = tag_of(e), len(seq)
+        for tag, seq in zip(self.tags, sequences):
+            m = len(seq)
             before, after = np.zeros((C + 1, M)), np.zeros((C + 1, M))
             before[C, :] = after[C, :] = 1.0                     # idle slots: the rest curve
             active, last = np.zeros(M), np.zeros(M)
@@ -432,13 +547,14 @@ class PhaseNLP:
                 p[L.find(L.p, f"{name}_{tag}")] = value.ravel(order="F")
         return p
 
-    def constraint_bounds(self, problem, sequences, tightening_deg: float = 0.0):
+    def constraint_bounds(self, problem, sequences, tightening_deg: float = 0.0,
+                          held: Held | None = None):
         """lbg, ubg of one solve: the criteria's bounds (for ``problem``'s ε and caps), the
-        envelope rows, and idle hand-over slots switched off."""
+        envelope rows, idle hand-over slots switched off, and every row of an idle
+        eccentricity slot free."""
         L = self.layout
         lbg, ubg = np.zeros(self.n_g), np.full(self.n_g, np.inf)
-        for e, seq in zip(self.eccs, sequences):
-            tag = tag_of(e)
+        for tag, seq in zip(self.tags, sequences):
             for block in ("peak_stationary", "mu_stationary", "run_sums"):
                 if self.has_mu or block != "mu_stationary":
                     lbg[L.find(L.g, f"{block}[{tag}]")] = ubg[L.find(L.g, f"{block}[{tag}]")] = 0.0
@@ -449,11 +565,21 @@ class PhaseNLP:
         for name, criterion in self._criterion_blocks:
             lower, upper = criterion.bounds(problem, tightening_deg)
             lbg[L.find(L.g, name)], ubg[L.find(L.g, name)] = lower, upper
+        if self.n_slots or self.n_scenarios:
+            idle = self.idle_tags(held)
+            if self.n_slots:
+                rows = L.find(L.g, "ripple_epigraph_slots")
+                lbg[rows] = [-np.inf if slot_tag(j) in idle else 0.0
+                             for j in range(self.n_slots)]
+            for block in L.g:
+                if any(block.name.endswith(f"[{tag}]") for tag in idle):
+                    lbg[block.slice], ubg[block.slice] = -np.inf, np.inf
         return lbg, ubg
 
-    def bounds(self, guess: dict, sequences) -> tuple[np.ndarray, np.ndarray]:
+    def bounds(self, guess: dict, sequences,
+               held: Held | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Variable bounds: the design's bounds, windows around the start's angles, idle
-        slots fixed."""
+        slots fixed (hand-over slots, and every variable of an idle eccentricity slot)."""
         P, L = self.problem, self.layout
         lbx, ubx = np.full(self.n_x, -np.inf), np.full(self.n_x, np.inf)
         sl = L.find(L.x, "lengths")
@@ -464,8 +590,7 @@ class PhaseNLP:
         # re-solve), near enough that a peak's point cannot reach the same curve's minimum
         # (about half a turn away), nor a hand-over the pair's other crossing.
         half_window = min(3 * math.pi / self.n_curves, math.pi / 3)
-        for e, seq in zip(self.eccs, sequences):
-            tag = tag_of(e)
+        for tag, seq in zip(self.tags, sequences):
             sl = L.find(L.x, f"phi_peak_{tag}")
             lbx[sl], ubx[sl] = guess[f"phi_peak_{tag}"] - half_window, \
                 guess[f"phi_peak_{tag}"] + half_window
@@ -486,6 +611,12 @@ class PhaseNLP:
             reach = math.pi * np.arange(1, self.slots + 1)
             sl = L.find(L.x, f"run_sums_{tag}")
             lbx[sl], ubx[sl] = -reach, reach
+        for tag in self.idle_tags(held):
+            for block in L.x:
+                if block.name.endswith(f"_{tag}"):
+                    value = np.zeros(block.size) if block.name in self._derived else \
+                        np.atleast_1d(np.asarray(guess[block.name], dtype=float))[:block.size]
+                    lbx[block.slice] = ubx[block.slice] = value
         return lbx, ubx
 
     def at_window_bound(self, x, lbx, ubx, tol: float = 1e-6) -> bool:
@@ -520,7 +651,7 @@ class PhaseNLP:
     def start(self, guess: dict, lbx, ubx, p) -> np.ndarray:
         """The initial x of a run: the guess within its bounds, the auxiliary variables
         consistent with the rest."""
-        return self.complete(np.clip(self.pack(guess), lbx, ubx), p)
+        return np.clip(self.complete(np.clip(self.pack(guess), lbx, ubx), p), lbx, ubx)
 
     def complete(self, x0: np.ndarray, p: np.ndarray) -> np.ndarray:
         """``x0`` with its auxiliary variables set consistently with the others."""
@@ -529,10 +660,18 @@ class PhaseNLP:
             x0[self.layout.find(self.layout.x, name)] = np.array(value).ravel()
         return x0
 
-    def worst_ripple(self, x, p) -> float:
-        """The surrogate's worst δ over the listed eccentricities at ``x``."""
+    def worst_ripple(self, x, p, held: Held | None = None) -> float:
+        """The surrogate's worst δ over the listed eccentricities and the held slots at
+        ``x``."""
         ripples = np.array(self.surrogate(x, p)[0]).ravel()
-        return float(ripples[self.listed].max())
+        idle = self.idle_tags(held) if self.n_slots or self.n_scenarios else set()
+        rows = self.listed + [len(self.eccs) + j for j in range(self.n_slots)
+                              if slot_tag(j) not in idle]
+        first = len(self.eccs) + self.n_slots
+        for j in range(self.n_scenarios):
+            if scenario_tag(j) not in idle:
+                rows += [first + j * len(self.eccs) + i for i in self.listed]
+        return float(ripples[rows].max())
 
     def binding(self, g, lbg, ubg) -> str:
         """Name of the constraint block most violated at ``g`` ('' when none is)."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 def summary_text(result, problem) -> str:
     """A short plain-text account of a solve, for the terminal and summary.txt."""
+    from ..sensitivity import sensitivity_line
     from ..units import gear_ratio_text
 
     lines = [f"{problem.name}: {result.status} ({problem.mechanism}, {problem.stroke} stroke, "
@@ -13,12 +14,20 @@ def summary_text(result, problem) -> str:
         lengths = set(problem.model.lengths)
         lines.append("design: " + ", ".join(f"{k} = {v:.4f} mm" if k in lengths else
                                             f"{k} = {v:g}" for k, v in result.design.items()))
-        lines.append(f"δ ({problem.objective.ripple}, worst over e = "
-                     f"{', '.join(f'{e:g}' for e in problem.eccentricities)}) = "
+        where = f"e = {', '.join(f'{e:g}' for e in problem.eccentricities)}"
+        if problem.eccentricity_range is not None and result.worst_eccentricity is not None:
+            lower, upper = problem.eccentricity_range
+            where = f"e in [{lower:g}, {upper:g}], at e = {result.worst_eccentricity:.4f}"
+        lines.append(f"δ ({problem.objective.ripple}, worst over {where}) = "
                      f"{result.delta:.6f}; ratio = {result.ratio:.6f} (output/input speed; "
                      f"gear ratio i = 1/ratio = {gear_ratio_text(result.ratio)}); least "
                      f"transmission angle = {result.min_transmission_angle_deg:.2f} deg")
+        if result.worst_case_delta is not None:
+            lines.append(f"robust: the worst part of the tolerance box has δ = "
+                         f"{result.worst_case_delta:.6f} (the objective); every part "
+                         f"assembles and keeps every constraint")
         lines.append(binding_text(result.active, problem))
+        lines.append(sensitivity_line(result.sensitivities))
         lines += bound_warnings(result, problem)
     else:
         lines.append(result.message)

@@ -49,6 +49,14 @@ class PhaseResult:
     timings: dict = field(default_factory=dict)            # seconds per stage
     #: the active bounds and binding constraints at the optimum, with their sensitivities
     active: list[dict] = field(default_factory=list)
+    #: exact dδ/dl, d(ratio)/dl and d(transmission-angle margin)/dl of the optimum for every
+    #: length (:meth:`optdesign.sensitivity.Sensitivities.to_dict`); empty without an optimum
+    sensitivities: dict = field(default_factory=dict)
+    #: with a regulation interval: the eccentricity of the largest δ over it (exact)
+    worst_eccentricity: float | None = None
+    #: a robust solve: the tolerance box's worst δ and least transmission angle of the optimum
+    worst_case_delta: float | None = None
+    worst_case_min_transmission_angle_deg: float | None = None
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -79,11 +87,22 @@ class SolveResult(Tabular):
     timings_s: dict = field(default_factory=dict)
     #: the active bounds and binding constraints of the best design (see PhaseResult.active)
     active: list[dict] = field(default_factory=list)
+    #: with a regulation interval: the best design's eccentricity of the largest δ over it
+    worst_eccentricity: float | None = None
+    #: a robust solve: the best design's worst δ over the tolerance box (its objective)
+    worst_case_delta: float | None = None
 
     def best_phase(self) -> PhaseResult | None:
         if self.design is None:
             return None
         return next(p for p in self.per_phase if p.design == self.design)
+
+    @property
+    def sensitivities(self) -> dict:
+        """The best design's exact derivatives with respect to its lengths (the best phase
+        count's :attr:`PhaseResult.sensitivities`; empty without an optimum)."""
+        best = self.best_phase()
+        return dict(best.sensitivities) if best else {}
 
     def summary(self) -> str:
         if self.design is None:
@@ -117,6 +136,7 @@ class SolveResult(Tabular):
 
         out = asdict(self)
         out["per_phase"] = [p.to_dict() for p in self.per_phase]
+        out["sensitivities"] = self.sensitivities
         sections = out.pop("sections")
         out.update(sections)
         return stamped(out, design_units(self.mechanism))

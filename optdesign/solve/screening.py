@@ -59,8 +59,11 @@ class Screening:
                 "basins": len(self.seeds), "critical_distance": self.radius}
 
 
-def screen(problem, count: int, n_designs: int, extra: list[dict] = ()) -> Screening:
-    """Screen ``n_designs`` Sobol designs and the designs in ``extra``; seeds best first."""
+def screen(problem, count: int, n_designs: int, extra: list[dict] = (),
+           sampled: dict | None = None) -> Screening:
+    """Screen ``n_designs`` Sobol designs and the designs in ``extra``; seeds best first.
+    ``sampled``, when given, receives the sampled ``delta`` and ``ratio`` of every candidate
+    (arrays in the candidates' order: a Pareto sweep filters them by ratio >= ε)."""
     free = problem.free_lengths()
     base = problem.start_values() | {problem.model.count_variable: count}
     lower = np.array([problem.design[k].lower for k in free])
@@ -71,7 +74,7 @@ def screen(problem, count: int, n_designs: int, extra: list[dict] = ()) -> Scree
         m = max(1, int(math.ceil(math.log2(max(n_designs, 2)))))
         rows += list(qmc.scale(sobol.random_base2(m)[:n_designs], lower, upper))
     X = np.array(rows).reshape(len(rows), len(free))
-    score, violation = _evaluate(problem, count, base, free, X)
+    score, violation = _evaluate(problem, count, base, free, X, sampled)
     feasible = violation <= 0
     span = np.where(upper > lower, upper - lower, 1.0)
     unit = (X - lower) / span
@@ -89,9 +92,11 @@ def screen(problem, count: int, n_designs: int, extra: list[dict] = ()) -> Scree
     return out
 
 
-def _evaluate(problem, count, base, free, X) -> tuple[np.ndarray, np.ndarray]:
+def _evaluate(problem, count, base, free, X, sampled: dict | None = None
+              ) -> tuple[np.ndarray, np.ndarray]:
     """(score, violation) of every design row of X: sampled objective, and the largest
-    constraint violation (<= 0 when every filter passes; inf when it does not assemble)."""
+    constraint violation (<= 0 when every filter passes; inf when it does not assemble);
+    ``sampled`` (if given) receives the sampled worst δ and ratio of each row."""
     model = problem.model
     S = X.shape[0]
     curves = count * len(STROKE_SIGNS[problem.stroke])
@@ -135,6 +140,9 @@ def _evaluate(problem, count, base, free, X) -> tuple[np.ndarray, np.ndarray]:
             scale = max([1.0] + [abs(b) for b in (lower, upper) if math.isfinite(b)])
             violation = np.maximum(violation, np.maximum(lower - v, v - upper) / scale)
         score = objective_of(problem).rank(q.worst_ripple, q.ratio)
+        if sampled is not None:
+            sampled.update(delta=np.asarray(q.worst_ripple, float),
+                           ratio=np.asarray(q.ratio, float))
     violation = np.where(np.isnan(violation), np.inf, violation)
     score = np.where(np.isfinite(score), score, np.inf)
     return score, violation

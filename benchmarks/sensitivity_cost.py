@@ -1,0 +1,63 @@
+"""Cost of the exact sensitivities of a design (optdesign.sensitivity) beside its verification.
+
+For the disc problem's optimum (n = 6, one eccentricity) and the paper's design of
+problems/sharkov2022.yaml at n = 6, 12 and 24 (three eccentricities): the median wall time of
+one ``sensitivities(problem, values, evaluation)`` call (the evaluation given, as the solver
+gives its verification's) and of one ``verify(problem, values)``, over ``--repeat`` calls
+after one warm-up (CasADi functions built).
+
+    python benchmarks/sensitivity_cost.py [--repeat 15]
+
+Prints a table; writes nothing.
+"""
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from optdesign.evaluation import evaluate_problem  # noqa: E402
+from optdesign.problem import load_problem  # noqa: E402
+from optdesign.sensitivity import sensitivities  # noqa: E402
+from optdesign.solve.verify import verify  # noqa: E402
+
+#: the disc problem's optimum (tests/solve/test_regression_optima.py pins its δ)
+DISC_OPTIMUM = {"l0": 399.97641497248475, "l1": 20.0, "l2": 399.99999997792696,
+                "l2_prime": 274.99999996642566, "l3": 26.860381817186937, "phases": 6}
+
+
+def median_ms(call, repeat: int) -> float:
+    call()
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        call()
+        times.append(time.perf_counter() - t0)
+    return 1e3 * statistics.median(times)
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=15)
+    args = parser.parse_args(argv)
+    paper = load_problem(ROOT / "problems" / "sharkov2022.yaml")
+    cases = [("sharkov2022_disc optimum", load_problem(ROOT / "problems" /
+                                                       "sharkov2022_disc.yaml"), DISC_OPTIMUM)]
+    cases += [(f"sharkov2022, n = {n}", paper, paper.start_values() | {"phases": n})
+              for n in (6, 12, 24)]
+    print("| design | eccentricities | sensitivities, ms | verify, ms | ratio |")
+    print("|---|---|---|---|---|")
+    for name, problem, values in cases:
+        ev = evaluate_problem(problem, values)
+        sens = median_ms(lambda: sensitivities(problem, values, ev), args.repeat)
+        ver = median_ms(lambda: verify(problem, values), args.repeat)
+        print(f"| {name} | {len(ev.per_e)} | {sens:.1f} | {ver:.1f} | {sens / ver:.2f} |")
+
+
+if __name__ == "__main__":
+    main()

@@ -28,3 +28,16 @@ def base_problem(**changes):
     data = yaml.safe_load((ROOT / "problems" / "sharkov2022.yaml").read_text())
     data.update(changes)
     return data
+
+
+def run_main(argv) -> tuple[int, str]:
+    """(exit code, stdout) of one in-process ``optdesign`` command."""
+    import contextlib
+    import io
+
+    from optdesign.cli import main
+
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        code = main([str(a) for a in argv])
+    return code, out.getvalue()

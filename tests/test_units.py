@@ -2,7 +2,6 @@
 ``schema_version`` and names the unit of every number it holds; the midrange is
 ``omega_midrange`` (``omega_avg`` its deprecated alias); the ratio's convention is stated and the
 gear ratio i = 1/ratio printed beside it."""
-import contextlib
 import csv
 import io
 import json
@@ -15,18 +14,13 @@ import yaml
 from optdesign.cli import main
 from optdesign.io import SCHEMA_VERSION
 from optdesign.units import OPAQUE, gear_ratio_text, units_of
-from tests.conftest import ROOT
+from tests.conftest import ROOT, run_main
 from tests.pareto.conftest import SMALL
 
 PROBLEMS = ROOT / "problems"
 
 
-def run(argv) -> tuple[int, str]:
-    """(exit code, stdout) of one in-process command."""
-    out = io.StringIO()
-    with contextlib.redirect_stdout(out):
-        code = main([str(a) for a in argv])
-    return code, out.getvalue()
+run = run_main
 
 
 @pytest.fixture(scope="module")

@@ -380,13 +380,18 @@ class PhaseNLP:
         ripples, means, peaks, cos_sq = [], [], [], {}
         self._derived: dict[str, ca.MX] = {}
         slots = [b.parameter(f"eccentricity_{slot_tag(j)}", 1) for j in range(self.n_slots)]
-        for tag, e in zip(self.tags, list(self.eccs) + slots):      # the nominal's blocks
-            pvec = ca.vertcat(*[lengths[k] * (e if k == self.model.regulating_variable else 1)
-                                for k in self.model.lengths])
-            ripple, mean, peak, cos_sq[tag] = self._eccentricity(b, tag, e, pvec, functions)
-            ripples.append(ripple)
-            means.append(mean)
-            peaks.append(peak)
+
+        def blocks(part: dict, tags, eccs, sq: dict) -> None:
+            """One eccentricity block per (tag, e) for the lengths ``part``."""
+            for tag, e in zip(tags, eccs):
+                pvec = ca.vertcat(*[part[k] * (e if k == self.model.regulating_variable else 1)
+                                    for k in self.model.lengths])
+                ripple, mean, peak, sq[tag] = self._eccentricity(b, tag, e, pvec, functions)
+                ripples.append(ripple)
+                means.append(mean)
+                peaks.append(peak)
+
+        blocks(lengths, self.tags, list(self.eccs) + slots, cos_sq)      # the nominal's blocks
         t = b.variable("worst_ripple", 1)
         b.row("ripple_epigraph", ca.vertcat(*[t - ripples[i] for i in self.listed]))
         if self.n_slots:            # the held interior eccentricities (free rows when idle)
@@ -404,13 +409,7 @@ class PhaseNLP:
             offsets = b.parameter(f"offsets_{scenario_tag(j)}", len(self.model.lengths))
             part = {k: lengths[k] + offsets[i] for i, k in enumerate(self.model.lengths)}
             first, sq = len(ripples), {}
-            for tag, e in zip(self.scenario_tags[j], self.eccs):
-                pvec = ca.vertcat(*[part[k] * (e if k == self.model.regulating_variable else 1)
-                                    for k in self.model.lengths])
-                ripple, mean, peak, sq[tag] = self._eccentricity(b, tag, e, pvec, functions)
-                ripples.append(ripple)
-                means.append(mean)
-                peaks.append(peak)
+            blocks(part, self.scenario_tags[j], self.eccs, sq)
             b.row(f"ripple_epigraph[{scenario_tag(j)}]",
                   ca.vertcat(*[t - ripples[first + i] for i in self.listed]))
             qj = Quantities(lengths=part, ratio=means[first], worst_ripple=t,

@@ -1,7 +1,5 @@
 """``optdesign tolerance``: its files, its JSON (units included), its terminal table and its
 refusals."""
-import contextlib
-import io
 import json
 
 import pytest
@@ -9,18 +7,14 @@ import pytest
 from optdesign.cli import main
 from optdesign.io import SCHEMA_VERSION
 from optdesign.tolerance.report import format_tolerance
-from tests.conftest import ROOT
+from tests.conftest import ROOT, run_main
 from tests.test_units import unlisted
 from tests.tolerance.conftest import paper
 
 EXAMPLE = ROOT / "problems" / "sharkov2022_disc_tolerance.yaml"
 
 
-def run(argv) -> tuple[int, str]:
-    out = io.StringIO()
-    with contextlib.redirect_stdout(out):
-        code = main([str(a) for a in argv])
-    return code, out.getvalue()
+run = run_main
 
 
 @pytest.fixture(scope="module")

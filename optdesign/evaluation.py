@@ -125,25 +125,48 @@ def evaluate(design: Design, stroke: str, input_speed: float,
         ev.failure = exc
         return ev
     for e in eccentricities:
-        phi = search_grid(design, e, n_grid)
-        sampled = design.sample(phi, e)
-        try:
-            design.check_assembly(e, phi=phi, cos_mu=sampled["cos_mu"])
-        except AssemblyError as exc:
-            ev.failure, ev.failed_eccentricity = exc, e
+        key = (design.mechanism, design.option_key, tuple(sorted(design.values.items())),
+               stroke, input_speed, float(e), tuple(strokes), n_grid)
+        known = _EVALUATED.get(key)
+        if known is None:
+            known = _evaluate_at(design, stroke, input_speed, e, strokes, n_grid)
+            if len(_EVALUATED) >= _EVALUATED_SIZE:
+                _EVALUATED.pop(next(iter(_EVALUATED)))
+            _EVALUATED[key] = known
+        if isinstance(known, AssemblyError):
+            ev.failure, ev.failed_eccentricity = known, e
             return ev
-        figures, runs = {}, []
-        for s in strokes:
-            figures[s], r = exact_figures(design, s, input_speed, e, phi=phi, sampled=sampled)
-            if s == stroke:
-                runs = r
-        speeds = driving_speeds(sampled["dtheta"], stroke)
-        angles = design.transmission_angles(e, phi=phi, cos_mu=sampled["cos_mu"])
-        cos_mu = sampled["cos_mu"]
-        extremes = np.concatenate([phi[np.argmax(cos_mu, axis=1)], phi[np.argmin(cos_mu, axis=1)]])
-        ev.per_e.append(EccentricityEvaluation(e, figures, runs, phi[np.argmax(speeds, axis=1)],
-                                               angles, extremes))
+        ev.per_e.append(known)
     return ev
+
+
+#: the per-eccentricity evaluations of the designs evaluated last, oldest first: a sweep or
+#: a solve verifies a design again as the next polish's start (the same figures, exactly)
+_EVALUATED: dict = {}
+_EVALUATED_SIZE = 64
+
+
+def _evaluate_at(design: Design, stroke: str, input_speed: float, e: float,
+                 strokes: tuple[str, ...], n_grid: int):
+    """One eccentricity of :func:`evaluate`: its EccentricityEvaluation, or the
+    AssemblyError that stops it."""
+    phi = search_grid(design, e, n_grid)
+    sampled = design.sample(phi, e)
+    try:
+        design.check_assembly(e, phi=phi, cos_mu=sampled["cos_mu"])
+    except AssemblyError as exc:
+        return exc
+    figures, runs = {}, []
+    for s in strokes:
+        figures[s], r = exact_figures(design, s, input_speed, e, phi=phi, sampled=sampled)
+        if s == stroke:
+            runs = r
+    speeds = driving_speeds(sampled["dtheta"], stroke)
+    angles = design.transmission_angles(e, phi=phi, cos_mu=sampled["cos_mu"])
+    cos_mu = sampled["cos_mu"]
+    extremes = np.concatenate([phi[np.argmax(cos_mu, axis=1)], phi[np.argmin(cos_mu, axis=1)]])
+    return EccentricityEvaluation(e, figures, runs, phi[np.argmax(speeds, axis=1)],
+                                  angles, extremes)
 
 
 def evaluate_problem(problem, values=None, strokes: tuple[str, ...] | None = None,

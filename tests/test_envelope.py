@@ -77,3 +77,23 @@ def test_ratio_scales_with_eccentricity(sine):
     half, _ = exact_figures(sine(6), "forward", 1.0, eccentricity=0.5)
     assert half.ratio == pytest.approx(0.5 * full.ratio, rel=1e-12)
     assert half.delta == pytest.approx(full.delta, rel=1e-9)
+
+
+def test_a_design_evaluated_again_reuses_its_figures_and_another_does_not(sine):
+    """The exact evaluator keeps the last designs' per-eccentricity figures: the same design
+    (a new but equal Design) gets the very same objects back, a design that differs in one
+    length, the stroke or the eccentricity is evaluated afresh, and the store stays bounded."""
+    from optdesign import evaluation
+
+    first = evaluation.evaluate(sine(4), "forward", 1.0, (1.0, 0.5))
+    again = evaluation.evaluate(sine(4), "forward", 1.0, (1.0, 0.5))
+    assert [a is b for a, b in zip(first.per_e, again.per_e)] == [True, True]
+    other = evaluation.evaluate(sine(4, a=1.0 + 1e-9), "forward", 1.0, (1.0,))
+    assert other.per_e[0] is not first.per_e[0]
+    reverse = evaluation.evaluate(sine(4), "reverse", 1.0, (1.0,))
+    assert reverse.per_e[0] is not first.per_e[0]
+    assert evaluation.evaluate(sine(4), "forward", 1.0, (0.25,)).per_e[0].figures[
+        "forward"].ratio == pytest.approx(0.25 * first.per_e[0].figures["forward"].ratio)
+    for k in range(evaluation._EVALUATED_SIZE + 5):
+        evaluation.evaluate(sine(4, a=1.0 + k * 1e-3), "forward", 1.0, (1.0,))
+    assert len(evaluation._EVALUATED) <= evaluation._EVALUATED_SIZE

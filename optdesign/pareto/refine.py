@@ -13,6 +13,11 @@ from one past the largest index among them.
   into the gaps of the count's front that are longer than ``max_gap`` in normalised
   (ratio, δ) distance, or where the slope dδ/d ratio (the ε multiplier) turns by more than
   ``max_turn_deg`` between neighbours, at most ``max_points`` in all, the longest gaps first.
+- :func:`plan_hypervolume`: once every count's own rounds are finished, rounds over the
+  front of every count together: ε values where two neighbours leave more than
+  ``hypervolume_gap`` of the normalised hypervolume uncovered (the rectangle between them),
+  at most ``hypervolume_points`` in all. Planned from every count's records of the rounds
+  before, so a resumed sweep plans these the same way.
 """
 from __future__ import annotations
 
@@ -39,6 +44,10 @@ DOMINANCE_REL = 1e-6
 DEFAULT_MAX_GAP = 0.1
 DEFAULT_MAX_POINTS = 12
 DEFAULT_MAX_TURN_DEG = 30.0
+#: rounds over the front of every count together, after each count's own rounds
+HYPERVOLUME_ROUNDS = 4
+DEFAULT_HYPERVOLUME_GAP = 3e-5
+DEFAULT_HYPERVOLUME_POINTS = 100
 
 
 @dataclass(frozen=True)
@@ -49,6 +58,8 @@ class Refinement:
     max_gap: float = DEFAULT_MAX_GAP
     max_points: int = DEFAULT_MAX_POINTS
     max_turn_deg: float = DEFAULT_MAX_TURN_DEG
+    hypervolume_gap: float = DEFAULT_HYPERVOLUME_GAP
+    hypervolume_points: int = DEFAULT_HYPERVOLUME_POINTS
 
 
 @dataclass
@@ -255,3 +266,105 @@ def plan(records: list[dict], lengths: list[str], settings: Refinement,
                           also=[g.upper["design"]] if turns else []))
         index += 1
     return tasks
+
+
+# --------------------------------------------------------------------------- every count at once
+@dataclass
+class CountTask:
+    """A task of a hypervolume round, with the phase count it solves."""
+
+    count: int
+    task: Task
+
+
+def _front_of_every_count(records: list[dict], lengths: list[str]) -> list[dict]:
+    """The non-dominated rows of every count together (each count's rows as :func:`visible`
+    shows them), by ratio."""
+    shown = [r for r in visible(records, lengths)
+             if not isinstance(_index(r), str) and _ok(r)]
+    if not shown:
+        return []
+    mask = non_dominated(objectives([r["delta"] for r in shown], [r["ratio"] for r in shown]))
+    return sorted((r for r, keep in zip(shown, mask) if keep),
+                  key=lambda r: (r["ratio"], r["delta"]))
+
+
+def plan_hypervolume(records: list[dict], lengths: list[str], settings: Refinement,
+                     least_index: int) -> list[CountTask]:
+    """The next hypervolume round: new ε values where the front of every count together
+    leaves more than ``settings.hypervolume_gap`` of the normalised hypervolume uncovered.
+
+    Normalised so that the front spans [0, 1] in ratio and δ, two neighbours a, b leave the
+    rectangle Δratio·Δδ between them to the staircase (about half of it above the true front
+    where the front is straight). Splitting it into k + 1 parts divides that by (k + 1)², so
+    a gap gets ⌈√(area / gap)⌉ − 1 new ε values (at least one), evenly in ratio, solved for
+    b's count (from b; from a too where a is of the same count and the slope turns by more
+    than ``max_turn_deg`` between them) and, where the front changes count in the gap, for
+    a's count too (from a). The largest areas first, at most
+    ``hypervolume_points`` solves over every hypervolume round. Gaps are left alone where a
+    count's earlier ε inside failed, landed inside the gap (dominated there), or shows the
+    front jumps (landed on b): the interval still open then shrinks to below the gap's area.
+
+    ``records``: every count's grid records of the rounds before the one planned; points are
+    numbered per count from one past its largest index (at least ``least_index``).
+    """
+    if not settings.enabled or settings.hypervolume_points <= 0:
+        return []
+    used = sum(1 for r in records if (r.get("round") or 0) > MAX_ROUNDS)
+    budget = settings.hypervolume_points - used
+    front = _front_of_every_count(records, lengths)
+    if budget <= 0 or len(front) < 2:
+        return []
+    r_span = front[-1]["ratio"] - front[0]["ratio"]
+    d_span = max(r["delta"] for r in front) - min(r["delta"] for r in front)
+    if r_span <= 0 or d_span <= 0:
+        return []
+    candidates = []                  # (area, [(count, lo, hi, start, also)])
+    for a, b in zip(front, front[1:]):
+        dx, dy = (b["ratio"] - a["ratio"]) / r_span, abs(b["delta"] - a["delta"]) / d_span
+        if dx * dy <= settings.hypervolume_gap:
+            continue
+        counts = [b["phases"]] + ([a["phases"]] if a["phases"] != b["phases"] else [])
+        ta, tb = (_angle(p.get("ratio_multiplier"), r_span, d_span) for p in (a, b))
+        turns = ta is None or tb is None or abs(ta - tb) > settings.max_turn_deg
+        jobs = []
+        for n in counts:
+            lo, hi = a["ratio"], b["ratio"]
+            inside = [t for t in records if t.get("phases") == n and
+                      t.get("epsilon") is not None and lo < t["epsilon"] < hi]
+            if any(not _ok(t) or t["ratio"] < b["ratio"] * (1 - DOMINANCE_REL)
+                   for t in inside):
+                continue
+            for t in inside:
+                hi = min(hi, t["epsilon"])          # the count's front jumps up to b
+            if (hi - lo) / r_span * dy <= settings.hypervolume_gap:
+                continue
+            start = b if n == b["phases"] else a
+            also = [a["design"]] if n == b["phases"] == a["phases"] and turns else []
+            jobs.append((n, lo, hi, start["design"], also))
+        if jobs:
+            candidates.append((dx * dy, jobs))
+    want = [max(1, math.ceil(math.sqrt(area / settings.hypervolume_gap)) - 1)
+            for area, _ in candidates]
+    given = [0] * len(candidates)
+    while True:
+        open_ = [i for i in range(len(candidates)) if given[i] < want[i] and
+                 len(candidates[i][1]) <= budget]
+        if not open_:
+            break
+        i = max(open_, key=lambda i: (candidates[i][0] / (given[i] + 1) ** 2, -i))
+        given[i] += 1
+        budget -= len(candidates[i][1])
+    index = {}
+    for r in records:
+        if not isinstance(_index(r), str):
+            index[r["phases"]] = max(index.get(r["phases"], least_index), _index(r) + 1)
+    out = []
+    for (_, jobs), k in zip(candidates, given):
+        for n, lo, hi, start, also in jobs:
+            for j in range(1, k + 1):
+                i = index.setdefault(n, least_index)
+                index[n] = i + 1
+                out.append(CountTask(n, Task(i, float(lo + (hi - lo) * j / (k + 1)), start,
+                                             also=also)))
+    return out

@@ -12,6 +12,8 @@ Registered in ``optdesign.problem.SECTION_PARSERS``; every key is optional::
         max_gap: 0.1        # normalised (ratio, δ) distance between neighbours
         max_points: 12      # most refined points per phase count
         max_turn_deg: 30    # a turn of the slope dδ/d ratio between neighbours
+        hypervolume_gap: 3.0e-5   # then over every count: hypervolume a gap may leave
+        hypervolume_points: 100   # most points those rounds add in all
 
 The ε range is always clipped to what each phase count can reach, so a span wider than the
 achievable range is harmless; a span that misses it leaves that count with no sweep points.
@@ -21,7 +23,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..declarations import Key, names
-from .refine import (DEFAULT_MAX_GAP, DEFAULT_MAX_POINTS, DEFAULT_MAX_TURN_DEG, MAX_ROUNDS,
+from .refine import (DEFAULT_HYPERVOLUME_GAP, DEFAULT_HYPERVOLUME_POINTS, DEFAULT_MAX_GAP,
+                     DEFAULT_MAX_POINTS, DEFAULT_MAX_TURN_DEG, HYPERVOLUME_ROUNDS, MAX_ROUNDS,
                      Refinement)
 
 DEFAULT_POINTS = 12
@@ -42,9 +45,12 @@ DECLARATION = Key(
             "a phase count", lower=1), min_items=1, default_text="every admissible count",
             example=[6], condition="each one the design admits"),
         Key("refine", "mapping", "after the uniform pass, more ε values where the front is "
-            f"coarse (at most {MAX_ROUNDS} rounds)",
+            f"coarse (at most {MAX_ROUNDS} rounds a count, then at most "
+            f"{HYPERVOLUME_ROUNDS} over every count together)",
             default={"enabled": True, "max_gap": DEFAULT_MAX_GAP,
-                     "max_points": DEFAULT_MAX_POINTS, "max_turn_deg": DEFAULT_MAX_TURN_DEG},
+                     "max_points": DEFAULT_MAX_POINTS, "max_turn_deg": DEFAULT_MAX_TURN_DEG,
+                     "hypervolume_gap": DEFAULT_HYPERVOLUME_GAP,
+                     "hypervolume_points": DEFAULT_HYPERVOLUME_POINTS},
             keys=(
                 Key("enabled", "bool", "refine at all", default=True),
                 Key("max_gap", "number", "refine until neighbours lie at most this far apart "
@@ -55,6 +61,13 @@ DECLARATION = Key(
                 Key("max_turn_deg", "number", "also refine where the slope dδ/d ratio "
                     "(normalised) turns by more than this between neighbours", unit="deg",
                     default=DEFAULT_MAX_TURN_DEG, lower=0, open_lower=True, upper=90),
+                Key("hypervolume_gap", "number", "then, on the front of every count together "
+                    "(normalised to span [0, 1] in ratio and δ), refine until no two "
+                    "neighbours leave more than this area (Δratio·Δδ) of the hypervolume "
+                    "uncovered", unit="-", default=DEFAULT_HYPERVOLUME_GAP, lower=0,
+                    open_lower=True, upper=1),
+                Key("hypervolume_points", "integer", "most points those rounds add in all (0: "
+                    "none)", default=DEFAULT_HYPERVOLUME_POINTS, lower=0, upper=MAX_POINTS),
             )),
     ))
 KEYS = names(DECLARATION.keys)

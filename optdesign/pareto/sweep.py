@@ -218,7 +218,7 @@ class _Sweep:
                 if not missing:
                     self.open_count(n)
                     self.advance(n)
-            while self.running:
+            while self.running or self.advance_hypervolume():
                 raise_if_terminated()
                 for fut in self.ex.wait_any(list(self.running)):
                     count, j = self.running.pop(fut)
@@ -312,6 +312,35 @@ class _Sweep:
                                      t.epsilon, t.start, [], seeds, t.also, tags)
                 self.running[fut] = (count, "round")
             return
+
+    def advance_hypervolume(self) -> bool:
+        """Every count's own rounds are finished: submit the first hypervolume round
+        (:func:`refine.plan_hypervolume`, over the front of every count) not finished yet;
+        False when none is left. Planned from the earlier rounds' records alone, as
+        :meth:`advance`."""
+        grid_records = [r for (_, tag), r in self.done.items() if not isinstance(tag, str)]
+        lengths = list(self.problem.model.lengths)
+        for r in range(refine.MAX_ROUNDS + 1,
+                       refine.MAX_ROUNDS + refine.HYPERVOLUME_ROUNDS + 1):
+            earlier = [rec for rec in grid_records if (rec.get("round") or 0) < r]
+            tasks = refine.plan_hypervolume(earlier, lengths, self.section.refine,
+                                            self.n_points)
+            if not tasks:
+                return False
+            missing = [t for t in tasks if (t.count, t.task.index) not in self.done]
+            if not missing:
+                continue
+            self.bar.total += len(missing)
+            self.bar.refresh()
+            for ct in missing:
+                # between two verified neighbours of a front the screening has seeded at every
+                # uniform point already: polished from the neighbours alone
+                t = ct.task
+                fut = self.ex.submit(worker.solve_point, self.problem, ct.count, t.index,
+                                     t.epsilon, t.start, [], [], t.also, {"round": r})
+                self.running[fut] = (ct.count, "round")
+            return True
+        return False
 
     def open_count(self, count: int) -> None:
         """Both ends of a count are known: lay out its ε grid and start its chains."""

@@ -22,8 +22,11 @@ from .conftest import small
     ({"refine": {"max_points": -1}},
      "small.yaml: pareto.refine.max_points must be at least 0 (got -1)"),
     ({"refine": {"enable": False}}, "small.yaml: pareto.refine.enable is not a known key; "
-                                    "did you mean enabled? known: enabled, max_gap, "
+                                    "did you mean enabled? known: enabled, "
+                                    "hypervolume_gap, hypervolume_points, max_gap, "
                                     "max_points, max_turn_deg"),
+    ({"refine": {"hypervolume_gap": 2}},
+     "small.yaml: pareto.refine.hypervolume_gap must lie in (0, 1] (got 2)"),
 ])
 def test_bad_pareto_section_exits_2_naming_the_key(write_problem, capsys, pareto, message):
     path = write_problem(small(**pareto), name="small.yaml")

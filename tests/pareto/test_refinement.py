@@ -7,8 +7,8 @@ import pandas as pd
 import pytest
 
 from optdesign.pareto import sweep
-from optdesign.pareto.refine import (Refinement, gaps, merge_identical, plan, superseded,
-                                     visible)
+from optdesign.pareto.refine import (MAX_ROUNDS, Refinement, gaps, merge_identical, plan,
+                                     plan_hypervolume, superseded, visible)
 from optdesign.pareto.seeds import RATIO_SLACK, ScreenedCount
 from optdesign.pareto.store import Journal
 from optdesign.pareto.worker import Candidate, best_candidate
@@ -87,6 +87,63 @@ def test_a_gap_where_the_front_jumps_is_narrowed_then_left_alone():
     assert len(found) == 1 and found[0].hi == pytest.approx(0.85)
 
 
+def _on(count, i, ratio, delta, **kw):
+    """A record of ``count`` (``rec`` makes count 4)."""
+    r = rec(i, ratio, delta, **kw)
+    r["key"], r["phases"], r["design"]["phases"] = [count, i], count, count
+    return r
+
+
+def test_hypervolume_rounds_fill_the_largest_uncovered_areas_across_counts():
+    """Two counts whose fronts cross: n = 6 best up to ratio 0.80, n = 4 beyond. The gap
+    that leaves the largest rectangle (Δratio·Δδ, normalised) gets the most new ε values, an
+    evenly covered stretch none, and where the front changes count both counts are tried."""
+    six = [_on(6, i, r, d, mult=0.5) for i, (r, d) in
+           enumerate([(0.70, 0.10), (0.72, 0.11), (0.74, 0.12), (0.76, 0.13), (0.78, 0.14),
+                      (0.80, 0.15)])]
+    four = [_on(4, i, r, d, mult=2.0) for i, (r, d) in
+            enumerate([(0.78, 0.20), (0.90, 0.40), (1.00, 0.90)])]
+    settings = Refinement(hypervolume_gap=1e-3, hypervolume_points=40)
+    tasks = plan_hypervolume(six + four, LENGTHS, settings, least_index=10)
+    assert tasks and len(tasks) <= 40
+    eps = {n: sorted(t.task.epsilon for t in tasks if t.count == n) for n in (4, 6)}
+    assert not any(0.70 < e < 0.80 for e in eps[6] + eps[4])      # evenly covered: no ε
+    assert any(0.80 < e < 0.90 for e in eps[6])                   # the count changes: six too
+    assert any(0.80 < e < 0.90 for e in eps[4])
+    big = sum(0.90 < e < 1.00 for e in eps[4])                    # rectangle 0.33 × 0.63
+    small = sum(0.80 < e < 0.90 for e in eps[4])                  # rectangle 0.33 × 0.31
+    assert big > small >= 1
+    for n, first in ((4, 10), (6, 10)):                           # numbered past the records
+        assert sorted(t.task.index for t in tasks if t.count == n) == \
+            list(range(first, first + len(eps[n])))
+    # the budget bounds every hypervolume round together; spent, nothing more
+    assert len(plan_hypervolume(six + four, LENGTHS, Refinement(
+        hypervolume_gap=1e-3, hypervolume_points=5), 10)) <= 5
+    spent = [_on(4, 10 + k, 0.92 + 0.01 * k, 0.45 + 0.05 * k, rnd=MAX_ROUNDS + 1)
+             for k in range(5)]
+    assert plan_hypervolume(six + four + spent, LENGTHS, Refinement(
+        hypervolume_gap=1e-3, hypervolume_points=5), 10) == []
+    assert plan_hypervolume(six + four, LENGTHS, Refinement(hypervolume_points=0), 10) == []
+
+
+def test_a_hypervolume_gap_where_a_count_jumps_is_not_tried_again():
+    """An ε of n = 4 inside a gap that landed on the upper neighbour (the front jumps): the
+    gap shrinks to below that ε and, once its rectangle is small, is left alone; one that
+    landed inside (a point dominated there) or failed closes the gap for that count."""
+    a, b = _on(4, 0, 0.80, 0.10, mult=0.1), _on(4, 1, 0.90, 0.50, mult=0.1)
+    settings = Refinement(hypervolume_gap=1e-3, hypervolume_points=40)
+    first = plan_hypervolume([a, b], LENGTHS, settings, 2)
+    assert first and all(0.80 < t.task.epsilon < 0.90 for t in first)
+    landed = _on(4, 2, 0.90, 0.50, mult=0.1, eps=0.82, design=dict(b["design"]),
+                 rnd=MAX_ROUNDS + 1)
+    again = plan_hypervolume([a, b, landed], LENGTHS, settings, 3)
+    assert again and all(0.80 < t.task.epsilon < 0.82 for t in again)
+    tight = dict(landed, epsilon=0.8001)
+    assert plan_hypervolume([a, b, tight], LENGTHS, settings, 3) == []
+    failed = _on(4, 2, 0.0, 0.0, eps=0.85, feasible=False, rnd=MAX_ROUNDS + 1)
+    assert plan_hypervolume([a, b, failed], LENGTHS, settings, 3) == []
+
+
 # --------------------------------------------------------------------------- (b) merging
 def test_identical_designs_are_merged_into_one_row():
     d = {"l1": 25.0, "l3": 30.0, "phases": 4}
@@ -160,7 +217,8 @@ def _gap(df):
 
 
 def test_a_refined_sweep_is_verified_merged_and_resumes_mid_refinement(tmp_path):
-    problem = problem_from_dict(small(refine={"max_points": 4}), where="small.yaml")
+    problem = problem_from_dict(small(refine={"max_points": 4, "hypervolume_points": 0}),
+                                where="small.yaml")
     out = tmp_path / "full"
     df = sweep(problem, out, workers=1, progress=False).points
     assert (df["status"] == "optimal").all() and len(df) == 4 + 4
@@ -194,6 +252,40 @@ def test_a_refined_sweep_is_verified_merged_and_resumes_mid_refinement(tmp_path)
     assert resumed["epsilon"].to_numpy() == pytest.approx(df["epsilon"].to_numpy(), rel=1e-12)
     assert resumed["delta"].to_numpy() == pytest.approx(df["delta"].to_numpy(), rel=1e-6)
     assert isinstance(pd.read_csv(again / "pareto.csv")["round"].iloc[0], np.integer)
+
+
+def test_hypervolume_rounds_add_verified_points_and_resume_alike(tmp_path):
+    """The small front with the hypervolume rounds on (budget 4): rounds ≥ 5 add at most 4
+    verified points where the refined front left the largest areas, the hypervolume on one
+    normalisation does not fall, and a run killed after the first of them resumes to the
+    same ε values."""
+    from optdesign.pareto.indicators import hypervolume_2d, non_dominated, normalise, objectives
+
+    settings = {"max_points": 2, "hypervolume_points": 4, "hypervolume_gap": 1e-3}
+    problem = problem_from_dict(small(refine=settings), where="small.yaml")
+    out = tmp_path / "full"
+    df = sweep(problem, out, workers=1, progress=False).points
+    late = df[df["round"] > MAX_ROUNDS]
+    assert 1 <= len(late) <= 4 and (df["status"] == "optimal").all()
+    for _, row in late.iterrows():
+        ver = verify(problem, {k: row[k] for k in ("l0", "l1", "l2", "l2_prime", "l3")}
+                     | {"phases": 4})
+        assert ver.feasible and ver.delta == pytest.approx(row["delta"], rel=1e-8)
+    f_all = objectives(df["delta"], df["ratio"])
+    f_before = objectives(df[df["round"] <= MAX_ROUNDS]["delta"],
+                          df[df["round"] <= MAX_ROUNDS]["ratio"])
+    z_all, ideal, nadir = normalise(f_all[non_dominated(f_all)])
+    z_before = normalise(f_before[non_dominated(f_before)], ideal, nadir)[0]
+    assert hypervolume_2d(z_all) >= hypervolume_2d(z_before) - 1e-12
+
+    lines = (out / "points.jsonl").read_text().splitlines(keepends=True)
+    cut = next(i for i, line in enumerate(lines)
+               if f'"round": {MAX_ROUNDS + 1}' in line) + 1
+    again = tmp_path / "again"
+    again.mkdir()
+    (again / "points.jsonl").write_text("".join(lines[:cut]))
+    resumed = sweep(problem, again, workers=1, resume=True, progress=False).points
+    assert resumed["epsilon"].to_numpy() == pytest.approx(df["epsilon"].to_numpy(), rel=1e-12)
 
 
 def test_a_dominated_point_of_a_real_sweep_is_re_solved_and_none_is_left(tmp_path,

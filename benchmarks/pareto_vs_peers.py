@@ -31,9 +31,10 @@ min(--budget-factor · T_ours, --cap) seconds, on one core:
   a non-dominated archive, one per phase count (the evaluation wrapper sees every design, not
   only the survivors: more generous to the peers than pymoo's ``res.opt``); a pymoo callback
   takes a snapshot of it at ~48 log-spaced times. What a peer "has" at time t is the
-  non-dominated union of its archives then, thinned to at most --archive-max designs by
-  dropping the least hypervolume contributor one at a time (exact verification costs ~10-30
-  ms a design).
+  non-dominated union of its archives then, thinned to as many designs as our non-dominated
+  front has (at least --archive-max: hypervolume grows with the number of points, so a peer
+  is never held to fewer than we show) by dropping the least hypervolume contributor one at
+  a time (exact verification costs ~10-30 ms a design).
 
 Scoring. Every point of every method is re-verified EXACTLY (``optdesign.solve.verify``, the
 evaluator and tolerances of ``optdesign pareto``); a peer's point that fails there is dropped
@@ -50,16 +51,16 @@ phase count), and over our points of each count's own front against the peer's o
 count (same count); positive means a peer design beats ours by that much in δ at no lower
 ratio (``pareto_scoring.domination_margin``).
 
-Problems (``CASES``, each swept by ``optdesign pareto`` in 5-15 s with --workers 2):
+Problems (``CASES``, each swept by ``optdesign pareto`` in 10-30 s with --workers 2):
 pareto_fourbar.yaml (four-bar, every length free, reverse stroke, n ∈ {4, 6}),
 pareto_disc_three_counts.yaml (four-bar, the paper's disc and crank kept, reverse stroke,
 n ∈ {4, 6, 8}), pareto_slotted_forward.yaml (slotted lever, forward stroke, n ∈ {3, 4, 5}).
 The four-bar's forward stroke has no front (docs/pareto.md), hence the slotted lever there.
 
     python benchmarks/pareto_vs_peers.py [--quick] [--problems NAME ...] [--peers nsga2 smsemoa]
-        [--budget-factor 10] [--cap 150] [--seed 1] [--workers 2] [--archive-max 100]
+        [--budget-factor 10] [--cap 300] [--seed 1] [--workers 2] [--archive-max 100]
 
-About 20 minutes with the defaults on 2 cores (each peer's budget is 10·T_ours, at most 150 s).
+About 25 minutes with the defaults on 2 cores (each peer's budget is 10·T_ours, at most 300 s).
 Writes benchmarks/results/pareto_vs_peers.{md,json} and docs/figures/pareto_vs_peers.png
 (``--quick``, a one-minute smoke run: pareto_fourbar alone, budgets ≤ 6 s, to *_quick files in
 benchmarks/results, nothing under docs/).
@@ -421,8 +422,11 @@ def _race(case, path, problem, model, verifier, args, log) -> dict:
         archives[name] = Archive(model, budget, snapshots)
         run_peer(name, archives[name], args.seed)
         log(f"  {name}: {archives[name].nfev} designs in {archives[name].elapsed():.1f} s")
-    finals = {name: score_peer(a, verifier, args.archive_max) for name, a in archives.items()}
     our_front = front_of(ours["points"])
+    # a peer keeps as many designs as our front shows, at least --archive-max: hypervolume
+    # grows with the number of points, and a peer's archive holds thousands
+    keep = max(args.archive_max, len(our_front))
+    finals = {name: score_peer(a, verifier, keep) for name, a in archives.items()}
     norm = Normalisation.of_fronts([f_of(our_front)] + [f_of(front_of(f["front"] +
                                                                       f["count_points"]))
                                                         for f in finals.values()])
@@ -430,11 +434,12 @@ def _race(case, path, problem, model, verifier, args, log) -> dict:
     count_fronts = count_fronts_of(ours["points"])
     peers = {}
     for name, a in archives.items():
-        curve = peer_curve(a, verifier, norm, checkpoints, args.archive_max)
+        curve = peer_curve(a, verifier, norm, checkpoints, keep)
         everything = finals[name]["front"] + finals[name]["count_points"]
-        hit = time_to_reach(a, verifier, norm, curve, hv_ours, args.archive_max)
+        hit = time_to_reach(a, verifier, norm, curve, hv_ours, keep)
         peers[name] = {
             "budget_s": budget, "elapsed_s": a.elapsed(), "designs_evaluated": a.nfev,
+            "archive_max": keep,
             "hv_at_t_ours": value_at([(t, h) for t, h, *_ in curve], t_ours),
             "hv_at_budget": curve[-1][1],
             "time_to_our_hv_s": hit,
@@ -576,12 +581,13 @@ def main(argv=None) -> int:
     ap.add_argument("--peers", nargs="+", choices=sorted(PEER_KEYS), default=None,
                     help="nsga2, smsemoa (default: both)")
     ap.add_argument("--budget-factor", type=float, default=10.0, help="peer budget / T_ours")
-    ap.add_argument("--cap", type=float, default=150.0, help="largest peer budget [s]")
+    ap.add_argument("--cap", type=float, default=300.0, help="largest peer budget [s]")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--workers", type=int, default=2, help="workers of optdesign pareto")
     ap.add_argument("--samples", type=int, default=360, help="crank samples of the peers")
     ap.add_argument("--archive-max", type=int, default=POP_SIZE,
-                    help="designs of a peer's archive verified at a checkpoint")
+                    help="least number of designs of a peer's archive verified at a "
+                         "checkpoint (more when our front has more)")
     ap.add_argument("--quick", action="store_true",
                     help=f"smoke run (~1 min): {', '.join(QUICK_CASES)}, budgets ≤ 6 s, "
                          f"results to *_quick files")
@@ -596,8 +602,9 @@ def main(argv=None) -> int:
     header = (f"Every point of every method verified exactly (`optdesign.solve.verify`); peers "
               f"on the designer's NumPy model ({args.samples} samples, refined), population "
               f"{POP_SIZE}, seed {args.seed}, budget min({args.budget_factor:g}·T_ours, "
-              f"{args.cap:g} s), at most {args.archive_max} archive designs verified per "
-              f"checkpoint. Hypervolume by moocore on one normalisation per problem (ideal and "
+              f"{args.cap:g} s); a peer's archive thinned at each checkpoint to as many designs "
+              f"as our non-dominated front has, at least {args.archive_max} (hypervolume grows "
+              f"with the number of points). Hypervolume by moocore on one normalisation per problem (ideal and "
               f"nadir of the non-dominated union of every method's verified final front, second "
               f"table), reference point (1.1, 1.1), at most 1.21. δ margin: the largest "
               f"δ_ours − δ_peer over pairs with ratio_peer ≥ ratio_ours; positive (bold) means "

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from .indicators import REFERENCE
+from .refine import MAX_ROUNDS
 
 MARKERS = "osD^v<>p*h"
 
@@ -147,8 +148,11 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
     if "round" in pts and (pts["round"].fillna(0) >= 1).any():
         later = pts[pts["round"].fillna(0) >= 1]
         again = int((later["start_from"] == "dominating").sum())
-        out.append(("p", f"{len(later) - again} point(s) (+ in the figure) were added after the "
-                         f"uniform ε pass where the front was coarse or turned"
+        area = int((later["round"] > MAX_ROUNDS).sum())
+        out.append(("p", f"{len(later) - again - area} point(s) (+ in the figure) were added "
+                         f"after the uniform ε pass where a count's front was coarse or turned"
+                         + (f", {area} more where the front of every count together left the "
+                            f"largest area of the hypervolume uncovered" if area else "")
                          + (f", and {again} dominated point(s) re-solved from the design "
                             f"dominating them" if again else "")
                          + f"; {int(pts['merged'].fillna(0).sum())} ε point(s) that reached a "

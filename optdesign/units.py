@@ -93,8 +93,10 @@ UNITS: dict[str, str] = {
     "knee": "- (row index)", "index": "- (row index)", "key": "- (phase count, point index)",
     "n_points": COUNT, "points": COUNT, "counts": "- (phase counts)", "tries": COUNT,
     "resumed_points": COUNT, "workers": COUNT,
-    "round": "- (refinement round; 0: the uniform pass)", "merged": COUNT,
+    "round": "- (refinement round; 0: the uniform pass, 5 and later: the hypervolume "
+             "rounds)", "merged": COUNT,
     "max_gap": "- (normalised objectives)", "max_points": COUNT,
+    "hypervolume_gap": "- (normalised objective area)", "hypervolume_points": COUNT,
     # bench accuracy
     "samples": COUNT, "smoothing": "- (rho, per unit of omega/omega1)",
     "delta_error": "- (absolute)", "delta_signed": "- (delta - reference delta)",

@@ -202,21 +202,37 @@ def gaps(front: list[dict], tried: list[dict], settings: Refinement) -> list[Gap
     return out
 
 
+def share_out(want: list[int], worth, budget: int, cost: list[int] | None = None) -> list[int]:
+    """Points per gap, one at a time to the gap of largest ``worth(i, given_i)`` (the first
+    on a tie) among those that want more and whose ``cost`` (solves a point takes, default
+    1) the budget still covers."""
+    cost = cost or [1] * len(want)
+    given = [0] * len(want)
+    while True:
+        open_ = [i for i in range(len(want)) if given[i] < want[i] and cost[i] <= budget]
+        if not open_:
+            return given
+        i = max(open_, key=lambda i: (worth(i, given[i]), -i))
+        given[i] += 1
+        budget -= cost[i]
+
+
 def allocate(found: list[Gap], budget: int, max_gap: float) -> list[int]:
     """New points per gap: each wants ceil(distance / max_gap) − 1 (at least one); with too
     small a budget, one at a time to the gap whose share (distance / (given + 1)) is longest."""
-    want = [max(1, math.ceil(g.distance / max_gap) - 1) for g in found]
-    given = [0] * len(found)
-    for _ in range(max(0, budget)):
-        open_ = [i for i in range(len(found)) if given[i] < want[i]]
-        if not open_:
-            break
-        i = max(open_, key=lambda i: (found[i].distance / (given[i] + 1), -i))
-        given[i] += 1
-    return given
+    return share_out([max(1, math.ceil(g.distance / max_gap) - 1) for g in found],
+                     lambda i, k: found[i].distance / (k + 1), budget)
 
 
 # --------------------------------------------------------------------------- a round's plan
+def _non_dominated(rows: list[dict]) -> list[dict]:
+    """The rows no other row dominates in (δ, ratio), in their order."""
+    if not rows:
+        return []
+    mask = non_dominated(objectives([r["delta"] for r in rows], [r["ratio"] for r in rows]))
+    return [r for r, keep in zip(rows, mask) if keep]
+
+
 def dominated(front: list[dict]) -> list[tuple[dict, dict]]:
     """(point, its best dominator) for every point another one dominates by more than
     :data:`DOMINANCE_REL`; the dominator of least δ."""
@@ -249,10 +265,7 @@ def plan(records: list[dict], lengths: list[str], settings: Refinement,
     if not settings.enabled:
         return tasks
     used = sum(1 for r in records if (r.get("round") or 0) >= 1 and r.get("replaces") is None)
-    mask = non_dominated(objectives([r["delta"] for r in shown], [r["ratio"] for r in shown])) \
-        if shown else []
-    front = [r for r, keep in zip(shown, mask) if keep]
-    found = gaps(front, records, settings)
+    found = gaps(_non_dominated(shown), records, settings)
     given = allocate(found, settings.max_points - used, settings.max_gap)
     new = []
     for g, k in zip(found, given):
@@ -280,12 +293,8 @@ class CountTask:
 def _front_of_every_count(records: list[dict], lengths: list[str]) -> list[dict]:
     """The non-dominated rows of every count together (each count's rows as :func:`visible`
     shows them), by ratio."""
-    shown = [r for r in visible(records, lengths)
-             if not isinstance(_index(r), str) and _ok(r)]
-    if not shown:
-        return []
-    mask = non_dominated(objectives([r["delta"] for r in shown], [r["ratio"] for r in shown]))
-    return sorted((r for r, keep in zip(shown, mask) if keep),
+    return sorted(_non_dominated([r for r in visible(records, lengths)
+                                  if not isinstance(_index(r), str) and _ok(r)]),
                   key=lambda r: (r["ratio"], r["delta"]))
 
 
@@ -344,17 +353,10 @@ def plan_hypervolume(records: list[dict], lengths: list[str], settings: Refineme
             jobs.append((n, lo, hi, start["design"], also))
         if jobs:
             candidates.append((dx * dy, jobs))
-    want = [max(1, math.ceil(math.sqrt(area / settings.hypervolume_gap)) - 1)
-            for area, _ in candidates]
-    given = [0] * len(candidates)
-    while True:
-        open_ = [i for i in range(len(candidates)) if given[i] < want[i] and
-                 len(candidates[i][1]) <= budget]
-        if not open_:
-            break
-        i = max(open_, key=lambda i: (candidates[i][0] / (given[i] + 1) ** 2, -i))
-        given[i] += 1
-        budget -= len(candidates[i][1])
+    given = share_out([max(1, math.ceil(math.sqrt(area / settings.hypervolume_gap)) - 1)
+                       for area, _ in candidates],
+                      lambda i, k: candidates[i][0] / (k + 1) ** 2, budget,
+                      cost=[len(jobs) for _, jobs in candidates])
     index = {}
     for r in records:
         if not isinstance(_index(r), str):

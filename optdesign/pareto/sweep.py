@@ -301,17 +301,21 @@ class _Sweep:
             missing = [t for t in tasks if (count, t.index) not in self.done]
             if not missing:
                 continue
-            self.bar.total += len(missing)
-            self.bar.refresh()
-            for t in missing:
-                seeds = [] if t.replaces is not None else \
-                    self.seeds(count, t.epsilon, [t.start, *t.also])
-                tags = {"round": r} | ({"replaces": t.replaces} if t.replaces is not None
-                                       else {})
-                fut = self.ex.submit(worker.solve_point, self.problem, count, t.index,
-                                     t.epsilon, t.start, [], seeds, t.also, tags)
-                self.running[fut] = (count, "round")
+            self.submit_round([
+                (count, t, [] if t.replaces is not None else
+                 self.seeds(count, t.epsilon, [t.start, *t.also]),
+                 {"round": r} | ({"replaces": t.replaces} if t.replaces is not None else {}))
+                for t in missing])
             return
+
+    def submit_round(self, jobs: list[tuple]) -> None:
+        """Submit a round's solves, (count, task, seeds, journal tags) each."""
+        self.bar.total += len(jobs)
+        self.bar.refresh()
+        for count, t, seeds, tags in jobs:
+            fut = self.ex.submit(worker.solve_point, self.problem, count, t.index, t.epsilon,
+                                 t.start, [], seeds, t.also, tags)
+            self.running[fut] = (count, "round")
 
     def advance_hypervolume(self) -> bool:
         """Every count's own rounds are finished: submit the first hypervolume round
@@ -330,15 +334,9 @@ class _Sweep:
             missing = [t for t in tasks if (t.count, t.task.index) not in self.done]
             if not missing:
                 continue
-            self.bar.total += len(missing)
-            self.bar.refresh()
-            for ct in missing:
-                # between two verified neighbours of a front the screening has seeded at every
-                # uniform point already: polished from the neighbours alone
-                t = ct.task
-                fut = self.ex.submit(worker.solve_point, self.problem, ct.count, t.index,
-                                     t.epsilon, t.start, [], [], t.also, {"round": r})
-                self.running[fut] = (ct.count, "round")
+            # between two verified neighbours of a front the screening has seeded at every
+            # uniform point already: polished from the neighbours alone
+            self.submit_round([(ct.count, ct.task, [], {"round": r}) for ct in missing])
             return True
         return False
 

@@ -2,10 +2,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Mapping
 
 import numpy as np
 
+from .buffered import buffered
 from .errors import AssemblyError
 from .mechanisms import get_mechanism
 
@@ -24,9 +26,9 @@ class Design:
     mechanism: str
     values: Mapping[str, float]
     options: Mapping[str, str] = field(default_factory=dict)
-    #: the parameter vector per eccentricity as a CasADi DM: single-angle calls (the exact
-    #: evaluator's root searches, thousands per design) cost half as much with it
-    _dm: dict = field(default_factory=dict, init=False, compare=False, repr=False)
+    #: the parameter vector per eccentricity, made once: the exact evaluator's root searches
+    #: make thousands of single-angle calls per design
+    _p: dict = field(default_factory=dict, init=False, compare=False, repr=False)
 
     @classmethod
     def from_problem(cls, problem, values: Mapping[str, float] | None = None) -> "Design":
@@ -41,7 +43,7 @@ class Design:
     def count(self) -> int:
         return int(round(self.values[self.model.count_variable]))
 
-    @property
+    @cached_property
     def option_key(self) -> tuple[tuple[str, str], ...]:
         return tuple(sorted((self.model.default_options() | dict(self.options)).items()))
 
@@ -61,12 +63,12 @@ class Design:
         return Design(self.mechanism, {k: v * factor if k in lengths else v
                                        for k, v in self.values.items()}, self.options)
 
-    def p_dm(self, eccentricity: float = 1.0):
-        """:meth:`p` as a CasADi DM, made once per eccentricity."""
-        if eccentricity not in self._dm:
-            import casadi as ca
-            self._dm[eccentricity] = ca.DM(self.p(eccentricity))
-        return self._dm[eccentricity]
+    def p_fixed(self, eccentricity: float = 1.0) -> np.ndarray:
+        """:meth:`p`, made once per eccentricity (read-only)."""
+        if eccentricity not in self._p:
+            self._p[eccentricity] = self.p(eccentricity)
+            self._p[eccentricity].flags.writeable = False
+        return self._p[eccentricity]
 
     def breakpoints(self, eccentricity: float = 1.0) -> tuple[float, ...]:
         values = dict(zip(self.model.lengths, self.p(eccentricity))) | {
@@ -85,21 +87,26 @@ class Design:
             except NotImplementedError:
                 pass
         fmap = self.model.mapped(self.count, self.option_key, phi.size)
-        out = fmap(phi[None, :], self.p(eccentricity))
-        return {k: np.array(v) for k, v in zip(("theta", "dtheta", "ddtheta", "cos_mu"), out)}
+        flat = buffered(fmap)(phi, np.tile(self.p(eccentricity), phi.size))
+        out, start = {}, 0
+        for i, key in enumerate(("theta", "dtheta", "ddtheta", "cos_mu")):
+            rows, cols = fmap.size_out(i)
+            out[key] = flat[start:start + rows * cols].reshape((rows, cols), order="F")
+            start += rows * cols
+        return out
 
     def at(self, phi: float, eccentricity: float = 1.0) -> dict[str, np.ndarray]:
         """The same at one crank angle (vectors over chains)."""
-        out = np.array(self.model.packed(self.count, self.option_key)(
-            float(phi), self.p_dm(eccentricity))).ravel()
+        out = buffered(self.model.packed(self.count, self.option_key))(
+            float(phi), self.p_fixed(eccentricity))
         return dict(zip(("theta", "dtheta", "ddtheta", "cos_mu"), out.reshape(4, -1)))
 
     def chain_at(self, phi: float, k: int, eccentricity: float = 1.0) -> tuple[float, ...]:
         """θ_k, dθ_k/dφ, d²θ_k/dφ², cos μ_k and d cos μ_k/dφ of chain k alone at one crank
         angle (the other chains are not evaluated)."""
-        out = self.model.chain(self.count, self.option_key, k).call(
-            [float(phi), self.p_dm(eccentricity)])
-        return tuple(float(v) for v in out)
+        out = buffered(self.model.chain(self.count, self.option_key, k))(
+            float(phi), self.p_fixed(eccentricity))
+        return tuple(out.tolist())
 
     def cos_peaks(self, phi: np.ndarray, eccentricity: float = 1.0,
                   cos_mu: np.ndarray | None = None, near: float = 1e-3):

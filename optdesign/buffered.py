@@ -1,11 +1,11 @@
 """Calls of a CasADi function through bound NumPy buffers: the exact evaluator's inner loop.
 
 ``casadi.Function.__call__`` converts every argument and every result through SWIG's
-typemaps, some 20 μs per call of a one-chain SX function, and the exact evaluator's root
-searches make thousands of single-angle calls per design. ``Function.buffer()`` binds NumPy
-arrays to the function's inputs and outputs once; a call then writes the inputs in place,
-evaluates and copies the outputs out, in about 2 μs. The arithmetic is CasADi's own, so the
-results are bit-identical to ``Function.call`` (``tests/test_buffered.py``).
+typemaps, which costs several times the arithmetic of a one-chain SX function, and the exact
+evaluator's root searches make thousands of single-angle calls per design.
+``Function.buffer()`` binds NumPy arrays to the function's inputs and outputs once; a call
+then writes the inputs in place, evaluates and copies the outputs out. The arithmetic is
+CasADi's own, so the results are bit-identical to ``Function.call`` (tests/test_buffered.py).
 
 A buffer is state: every thread keeps its own (:func:`buffered`).
 """

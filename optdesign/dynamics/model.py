@@ -39,6 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..buffered import BufferedCall
 from ..errors import ProblemError
 from ..mechanisms import STROKE_SIGNS
 from .section import DynamicsSection, LoadTable
@@ -88,11 +89,7 @@ class Holders:
         phi = ca.MX.sym("phi")
         theta, dtheta, ddtheta, _ = design.function()(phi, ca.DM(design.p(1.0)))
         self.function = ca.Function("holders", [phi], [ca.vertcat(theta, dtheta, ddtheta)])
-        self._arg = np.zeros(1)
-        self._res = np.zeros(3 * self.count)
-        self._buffer, self._evaluate = self.function.buffer()
-        self._buffer.set_arg(0, memoryview(self._arg))
-        self._buffer.set_res(0, memoryview(self._res))
+        self._evaluate = BufferedCall(self.function)     # this object's own buffer
         self.signs = np.repeat(np.asarray(STROKE_SIGNS[stroke], dtype=float), self.count)
         self.gain = reduction * self.signs
         self.chain = np.tile(np.arange(self.count), len(STROKE_SIGNS[stroke]))
@@ -109,10 +106,9 @@ class Holders:
     def __call__(self, phi: float):
         phi = float(phi)
         if phi != self._last_phi:       # the event functions ask again at the same angle
-            self._arg[0] = phi
-            self._evaluate()
+            res = self._evaluate(phi)
             n = self.count
-            self._last = tuple(self.gain * self._res[i * n:(i + 1) * n][self.chain]
+            self._last = tuple(self.gain * res[i * n:(i + 1) * n][self.chain]
                                for i in range(3))
             self._last_phi = phi
         return self._last

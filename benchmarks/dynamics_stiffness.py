@@ -32,6 +32,7 @@ import argparse
 import itertools
 import json
 import os
+import platform
 import subprocess
 import sys
 import tempfile
@@ -187,7 +188,12 @@ def sweep(args) -> None:
 
     name = "dynamics_stiffness_quick" if args.quick else "dynamics_stiffness"
     rows = _merged(RESULTS / f"{name}.json", rows, stiffnesses)
-    atomic_write_json(RESULTS / f"{name}.json", {"cases": rows})
+    # The time is that of this run, though rows of earlier runs may be kept (``_merged``).
+    meta = {"python": sys.version.split()[0], "time": time.strftime("%Y-%m-%d %H:%M:%S"),
+            "machine": f"{platform.machine()} {platform.system()}", "cores": os.cpu_count(),
+            "command": "PYTHONPATH=. python benchmarks/dynamics_stiffness.py " +
+                       " ".join(sys.argv[1:])}
+    atomic_write_json(RESULTS / f"{name}.json", {"meta": meta, "cases": rows})
     atomic_write_text(RESULTS / f"{name}.md", sweep_report(rows))
     print(f"wrote {RESULTS / name}.md, .json; {sum(r['passed'] for r in rows)} of "
           f"{len(rows)} runs passed")

@@ -14,7 +14,7 @@ from .mechanisms import get_mechanism
 #: |cos μ| may exceed 1 by this much and still count as assembled: none, since past 1 the
 #: floored square root of geometry.circle_intersection puts a spurious spike in the speed
 ASSEMBLY_TOL = 0.0
-#: grids of at least this many angles are evaluated as NumPy lanes (the same arithmetic, a
+#: grids of at least this many angles are evaluated as NumPy lanes (CasADi's arithmetic, a
 #: fixed cost per instruction that pays from a few hundred angles on); shorter ones by CasADi
 LANES_FROM = 256
 

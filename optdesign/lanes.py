@@ -4,8 +4,11 @@
 nanoseconds per instruction per input. Screening thousands of designs at hundreds of crank
 angles calls the same few thousand instructions a hundred thousand times, so the instruction
 list is turned once into NumPy statements, each applied to a whole array of inputs ("lanes")
-at once: the same arithmetic in the same order, so the values agree with CasADi's to the last
-bits of libm, at a fraction of the cost (``tests/test_lanes.py``).
+at once: the same arithmetic in the same order, at a fraction of the cost. The elementary
+operations are correctly rounded, so they give CasADi's values bit for bit; NumPy's elementary
+functions (arccos, arctan2, exp, ...) are the C library's on some machines and NumPy's own
+SIMD kernels on others (AVX-512), which can differ in the last bit, so the values agree with
+CasADi's to a few units in the last place (``tests/test_lanes.py``).
 
 Only scalar SX instructions are translated; a function holding anything else (a call, a
 matrix operation) raises :class:`NotImplementedError` at construction, and the caller keeps

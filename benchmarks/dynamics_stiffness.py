@@ -63,6 +63,14 @@ def problem(stiffness: float, inertia: float, damping: float, turns: int):
     return problem_from_dict(data, "benchmark.yaml")
 
 
+def run_meta(**extra) -> dict:
+    """This run's machine, time and command: the 'measured on' line of benchmarks/docs.py."""
+    return {"python": sys.version.split()[0], "time": time.strftime("%Y-%m-%d %H:%M:%S"),
+            "machine": f"{platform.machine()} {platform.system()}", "cores": os.cpu_count(),
+            "command": "PYTHONPATH=. python benchmarks/dynamics_stiffness.py " +
+                       " ".join(sys.argv[1:])} | extra
+
+
 def compare_methods(args) -> None:
     """One row per (stiffness, method), printed as it comes, then written to
     benchmarks/results/NAME.{md,json} (NAME from ``--name``): table 1 every row, table 2 the
@@ -93,11 +101,8 @@ def compare_methods(args) -> None:
             print(f"{stiffness:>10.0e} {(stiffness / args.inertia) ** 0.5:>12.3g} "
                   f"{method:>6} {r.steps:>8d} {c['nfev']:>9d} {c['njev']:>6d} {c['nlu']:>7d} "
                   f"{r.events:>8d} {wall:>8.2f} {r.dynamic.delta:>10.6f}", flush=True)
-    meta = {"python": sys.version.split()[0], "time": time.strftime("%Y-%m-%d %H:%M:%S"),
-            "cores": os.cpu_count(), "conditions": conditions,
-            "command": "PYTHONPATH=. python benchmarks/dynamics_stiffness.py " +
-                       " ".join(sys.argv[1:])}
-    atomic_write_json(RESULTS / f"{args.name}.json", {"meta": meta, "rows": rows})
+    atomic_write_json(RESULTS / f"{args.name}.json",
+                      {"meta": run_meta(conditions=conditions), "rows": rows})
     atomic_write_text(RESULTS / f"{args.name}.md", methods_report(rows, conditions))
     print(f"wrote {RESULTS / (args.name + '.md')}")
 
@@ -188,12 +193,8 @@ def sweep(args) -> None:
 
     name = "dynamics_stiffness_quick" if args.quick else "dynamics_stiffness"
     rows = _merged(RESULTS / f"{name}.json", rows, stiffnesses)
-    # The time is that of this run, though rows of earlier runs may be kept (``_merged``).
-    meta = {"python": sys.version.split()[0], "time": time.strftime("%Y-%m-%d %H:%M:%S"),
-            "machine": f"{platform.machine()} {platform.system()}", "cores": os.cpu_count(),
-            "command": "PYTHONPATH=. python benchmarks/dynamics_stiffness.py " +
-                       " ".join(sys.argv[1:])}
-    atomic_write_json(RESULTS / f"{name}.json", {"meta": meta, "cases": rows})
+    # the time is that of this run, though rows of earlier runs may be kept (``_merged``)
+    atomic_write_json(RESULTS / f"{name}.json", {"meta": run_meta(), "cases": rows})
     atomic_write_text(RESULTS / f"{name}.md", sweep_report(rows))
     print(f"wrote {RESULTS / name}.md, .json; {sum(r['passed'] for r in rows)} of "
           f"{len(rows)} runs passed")

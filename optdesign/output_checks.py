@@ -39,25 +39,47 @@ def default_out(name: str, suffix: str = "") -> Path:
     return RESULTS / (safe_folder_name(name) + suffix)
 
 
-def prepare_out(out: str | Path | None, name: str, suffix: str = "",
-                files: tuple[str, ...] = ()) -> Path:
-    """The output folder of a command, made and checked writable before any work.
-
-    ``out`` is the ``--out`` argument (None: :func:`default_out` of ``name``). ``files`` are
-    the names the command will write there: none may be a folder. Raises :class:`UsageError`
-    (exit 2) naming the folder and the reason.
-    """
-    label = f"--out {shown(str(out))}" if out is not None else \
-        f"{default_out(name, suffix)} (the default output folder; give --out)"
-    path = Path(out) if out is not None else default_out(name, suffix)
-    text = str(path)
-    if not text or "\0" in text:
-        raise UsageError(f"{label}: is not a folder name")
-    real = os.path.realpath(path)
+def system_tree(real: str) -> str | None:
+    """The kernel file system (``/proc``, ``/sys``, ``/dev`` but its RAM disk) that the
+    resolved path ``real`` lies in, or None."""
     for tree in SYSTEM_TREES:
         if (real == tree or real.startswith(tree + os.sep)) and \
                 not real.startswith(RAM_DISK + os.sep):
-            raise UsageError(f"{label}: is under {tree}, not a place for results")
+            return tree
+    return None
+
+
+def resolve_out(out: str | Path | None, name: str, suffix: str = "") -> tuple[Path, str]:
+    """(the output folder, its label for messages), checked and normalised but not created.
+
+    ``out`` is the ``--out`` argument (None: :func:`default_out` of ``name``). An empty name
+    is refused (it would mean the current folder); ``..`` is resolved as the kernel resolves
+    it, so ``a/b/../../x`` is ``x`` and creates no ``a/b``. Raises :class:`UsageError`.
+    """
+    label = f"--out {shown(str(out))}" if out is not None else \
+        f"{default_out(name, suffix)} (the default output folder; give --out)"
+    text = os.fspath(out) if out is not None else str(default_out(name, suffix))
+    if not text.strip() or "\0" in text:
+        raise UsageError(f"{label}: is not a folder name")
+    path = Path(text)
+    real = os.path.realpath(path)
+    tree = system_tree(real)
+    if tree:
+        raise UsageError(f"{label}: is under {tree}, not a place for results")
+    if ".." in path.parts:
+        path = Path(real) if path.is_absolute() else Path(os.path.relpath(real))
+    return path, label
+
+
+def prepare_out(out: str | Path | None, name: str, suffix: str = "",
+                files: tuple[str, ...] = ()) -> Path:
+    """The output folder of a command (:func:`resolve_out`), made and checked writable
+    before any work.
+
+    ``files`` are the names the command will write there: none may be a folder. Raises
+    :class:`UsageError` (exit 2) naming the folder and the reason.
+    """
+    path, label = resolve_out(out, name, suffix)
     try:
         if path.exists() and not path.is_dir():
             raise UsageError(f"{label}: exists and is not a folder")

@@ -99,10 +99,11 @@ def _snapshot(folder):
 
 
 def _litter(folder):
-    """Temporaries in the folder, and any sibling but its lock left by a run."""
+    """Temporaries in the folder, and any sibling left by a run (its lock included: a run
+    removes it at its end)."""
     temps = [p.name for p in folder.iterdir() if p.name.endswith(".tmp")]
     siblings = [p.name for p in folder.parent.iterdir()
-                if p.name.startswith(f".{folder.name}.") and p.name != f".{folder.name}.lock"]
+                if p.name.startswith(f".{folder.name}.")]
     return temps + siblings
 
 

@@ -1,6 +1,7 @@
 """``optdesign init [--mechanism NAME] [--out FILE] [--force]``: a starting problem file."""
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 
@@ -33,7 +34,11 @@ def run(args) -> int:
 
     from ..problem import name_from_stem
 
-    atomic_write_text(path, starter_text(args.mechanism, name=name_from_stem(path.stem)))
+    try:
+        atomic_write_text(path, starter_text(args.mechanism, name=name_from_stem(path.stem)))
+    except OSError as exc:        # a read-only or kernel folder: name --out, not a temporary
+        raise UsageError(f"--out {shown(str(path))}: cannot write there "
+                         f"({exc.strerror or type(exc).__name__})") from None
     print(f"wrote {path}")
     return 0
 
@@ -42,12 +47,16 @@ def _checked_out(path: Path, force: bool) -> Path:
     """``path`` if init may write it: not a folder, in a folder that exists, and new (or
     ``force``)."""
     from ..errors import UsageError, shown
+    from ..output_checks import system_tree
 
     label = f"--out {shown(str(path))}"
     if not str(path) or "\0" in str(path):
         raise UsageError(f"{label}: is not a file name")
     if path.is_dir():
         raise UsageError(f"{label}: is a folder; give a file name such as my.yaml")
+    tree = system_tree(os.path.realpath(path))
+    if tree:
+        raise UsageError(f"{label}: is under {tree}, not a place for a problem file")
     if path.exists() and not force:
         raise UsageError(f"{label}: exists; init never overwrites a file (--force does)")
     if not path.parent.is_dir():

@@ -44,7 +44,7 @@ def _positive(low, high=None):
 def run(args) -> int:
     from ..errors import ProblemError
     from ..lifetime import exit_on_sigterm
-    from ..output_checks import default_out, prepare_out
+    from ..output_checks import prepare_out, resolve_out
     from ..output_dir import OutputFolder
     from ..pareto import sweep
     from ..outputs import PARETO_FILES, write_front, write_report
@@ -56,8 +56,8 @@ def run(args) -> int:
         raise ProblemError(f"{Path(args.problem).name}: design: a front needs a free length "
                            f"(give one a range, e.g. {{lower: 30, upper: 90}}); every length "
                            f"is fixed")
-    out = Path(args.out) if args.out is not None else default_out(problem.name, "_pareto")
-    if args.resume and not os.path.exists(out / "points.jsonl"):
+    out, _ = resolve_out(args.out, problem.name, "_pareto")
+    if args.resume and not os.path.lexists(out / "points.jsonl"):
         raise ProblemError(f"{out / 'points.jsonl'}: nothing to resume (no journal there)")
     out = prepare_out(args.out, problem.name, "_pareto", files=PARETO_FILES)
     # one run at a time in ``out``; a fresh sweep clears the previous one's files first, so

@@ -10,8 +10,10 @@ without its newline, cut short by a kill, is dropped.
 """
 from __future__ import annotations
 
+import errno
 import json
 import os
+import stat
 from pathlib import Path
 
 from ..errors import ProblemError
@@ -54,6 +56,7 @@ class Journal:
             return ProblemError(f"{self.path}: damaged journal ({what}); it is left as it "
                                 f"is: run without --resume to start afresh")
 
+        self._require_regular()
         try:
             text = self.path.read_text(encoding="utf-8")
         except UnicodeDecodeError:
@@ -78,7 +81,7 @@ class Journal:
 
     def start(self, settings: dict, resume: bool) -> list[dict]:
         """Open the journal for a run; returns the records a resumed run keeps."""
-        if resume and self.path.exists():
+        if resume and os.path.lexists(self.path):
             header, records, whole = self.read_to_resume()
             old = {k: v for k, v in header.items() if k != "key"}
             if old != json.loads(_line(settings)):
@@ -98,12 +101,34 @@ class Journal:
 
     def append(self, record: dict) -> None:
         line = _line(record) + "\n"
-        fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
         try:
+            fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW
+                         | os.O_NONBLOCK | os.O_CLOEXEC, 0o644)
+        except OSError as exc:
+            if exc.errno == errno.ELOOP:
+                raise ProblemError(f"{self.path}: has become a link; the journal is written "
+                                   f"only as a regular file in the output folder") from None
+            raise
+        try:
+            if not stat.S_ISREG(os.fstat(fd).st_mode):
+                raise ProblemError(f"{self.path}: is not a regular file; the journal is "
+                                   f"written only as a regular file in the output folder")
             os.write(fd, line.encode("utf-8"))      # one write per line: whole or nothing
             os.fsync(fd)
         finally:
             os.close(fd)
+
+    def _require_regular(self) -> None:
+        """Refuse a journal that is a link or anything but a regular file: what the run
+        reads and appends to stays inside the output folder."""
+        try:
+            mode = os.lstat(self.path).st_mode
+        except FileNotFoundError:
+            return
+        if not stat.S_ISREG(mode):
+            what = "a link" if stat.S_ISLNK(mode) else "not a regular file"
+            raise ProblemError(f"{self.path}: is {what}; a journal to resume must be a "
+                               f"regular file in the output folder (it is left as it is)")
 
 
 def _record(line: str) -> dict | None:

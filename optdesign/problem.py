@@ -177,7 +177,7 @@ EXTRA_CONSTRAINT_KEYS: set[str] = {"max_speed_fraction_of_critical"}
 EXTRA_CONSTRAINT_SECTIONS: dict[str, str] = {"max_speed_fraction_of_critical": "driveline"}
 
 #: every ``constraints:`` key: the general ones, those a mechanism declares in its
-#: ``constraint_keys`` (it reads them in ``read_constraints``) and the sections' extras
+#: ``constraint_keys`` (the loader reads each by its declaration) and the sections' extras
 CONSTRAINT_KEYS: tuple[Key, ...] = (
     Key("min_transmission_angle_deg", "number", "least transmission angle min(μ, 180° − μ) "
         "of every chain over the turn, at every listed eccentricity", unit="deg",
@@ -187,7 +187,7 @@ CONSTRAINT_KEYS: tuple[Key, ...] = (
         default=Constraints.assembly_margin, lower=0, upper=1, open_upper=True),
     Key("min_pin_radius", "number", "least pin radius |AC_i| of the disc (l2 − l2_prime, or "
         "l2_prime under pin_layout: text): the pins must fit on the disc", unit="mm",
-        default=Constraints.min_pin_radius),
+        default=Constraints.min_pin_radius, lower=0),
     Key("grashof", "bool", "chain 1 (O A B1 O1) a Grashof crank-rocker with l1 the crank",
         default=Constraints.grashof),
     Key("max_speed_fraction_of_critical", "number", "the cardan shaft's operating speed at "
@@ -539,8 +539,7 @@ def _read_constraints(r, raw, mech) -> Constraints:
     own = GENERAL_CONSTRAINT_KEYS | set(mech.constraint_keys)
     r.known_keys(raw, "constraints", own | EXTRA_CONSTRAINT_KEYS)
     kw = {k.name: k.read(r, raw[k.name], f"constraints.{k.name}") for k in CONSTRAINT_KEYS
-          if k.name in GENERAL_CONSTRAINT_KEYS and k.name in raw}
-    kw |= mech.read_constraints({k: raw[k] for k in mech.constraint_keys if k in raw}, r)
+          if k.name in own and k.name in raw}
     kw["extra"] = {k: v for k, v in raw.items() if k in EXTRA_CONSTRAINT_KEYS}
     return Constraints(**kw)
 

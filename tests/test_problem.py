@@ -60,6 +60,8 @@ BAD = [
     (base_problem(constraints={"min_transmission_angle_deg": 95}),
      r"constraints\.min_transmission_angle_deg must lie in \[0, 90\)"),
     (base_problem(constraints={"grashof": "yes"}), r"constraints\.grashof must be true or false"),
+    (base_problem(constraints={"min_pin_radius": -50}),
+     r"constraints\.min_pin_radius must not be negative \(got -50\)"),
     (base_problem(regulation={"eccentricity": [1.0, 1.5]}),
      r"regulation\.eccentricity fractions must lie in \(0, 1\]"),
     (base_problem(regulation={"eccentricity": []}), r"regulation\.eccentricity must be a non-empty"),

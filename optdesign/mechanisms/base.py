@@ -77,13 +77,8 @@ class Mechanism(ABC):
         """
 
     #: keys of the ``constraints:`` section this mechanism understands beyond the general ones
+    #: (declared in ``optdesign.problem.CONSTRAINT_KEYS``, read generically by the loader)
     constraint_keys: ClassVar[frozenset[str]] = frozenset()
-
-    def read_constraints(self, raw: Mapping, reader) -> dict:
-        """Parse this mechanism's own keys of the ``constraints:`` section (those in
-        ``constraint_keys`` that the file gives) with the loader's public
-        :class:`~optdesign.problem.Reader`; returns ``Constraints`` fields."""
-        return {}
 
     def criteria(self, constraints, options: Mapping[str, str]) -> list:
         """This mechanism's own constraints (:class:`optdesign.criteria.LengthConstraint`),

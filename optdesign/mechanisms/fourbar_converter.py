@@ -85,18 +85,6 @@ class FourBarConverter(Mechanism):
         collinear = options.get("pin_layout", "collinear") == "collinear"
         return lengths["l2"] - lengths["l2_prime"] if collinear else lengths["l2_prime"]
 
-    def read_constraints(self, raw, reader):
-        """``min_pin_radius`` (mm, a number) and ``grashof`` (true or false)."""
-        out = {}
-        if "min_pin_radius" in raw:
-            out["min_pin_radius"] = reader.number(raw["min_pin_radius"],
-                                                  "constraints.min_pin_radius")
-        if "grashof" in raw:
-            if not isinstance(raw["grashof"], bool):
-                raise reader.error("constraints.grashof", "must be true or false")
-            out["grashof"] = raw["grashof"]
-        return out
-
     def criteria(self, constraints, options):
         """The pins must fit on the disc, |AC_i| >= min_pin_radius; with ``grashof: true``
         chain 1 (O A B1 O1) is a Grashof crank-rocker with l1 the crank, s + l <= p + q,

@@ -9,6 +9,7 @@ from .design import Design
 from .envelope import StrokeFigures
 from .errors import ProblemError
 from .evaluation import evaluate
+from .quantities import design_quantities
 from .regulation import worst_over_range
 from .tabular import Tabular
 
@@ -34,6 +35,9 @@ class AnalysisResult(Tabular):
     #: it with their eccentricities (``eccentricity_range, worst_eccentricity, delta,
     #: angle_eccentricity, min_transmission_angle_deg``)
     regulation_range: dict | None = None
+    #: every quantity's exact value (:func:`optdesign.quantities.quantities_of`: ``values``
+    #: and ``per_eccentricity``); empty when the design does not assemble
+    quantities: dict = field(default_factory=dict)
 
     def summary(self) -> str:
         lengths = ", ".join(f"{k} = {v:g}" for k, v in self.design.items())
@@ -68,6 +72,7 @@ class AnalysisResult(Tabular):
         if self.failure:
             out["failure"] = self.failure
         out["constraints"] = self.constraints
+        out["quantities"] = self.quantities
         out.update(self.sections)
         from .units import design_units, stamped
         return stamped(out, design_units(self.mechanism))
@@ -128,6 +133,7 @@ def analyze(problem, values: dict | None = None) -> AnalysisResult:
         if hasattr(section, "analyze"):
             result.sections[key] = section.analyze(problem, result)
     result.constraints = check_constraints(problem, ev)
+    result.quantities = design_quantities(problem, ev)
     return result
 
 
@@ -181,6 +187,14 @@ def format_analysis(result: AnalysisResult, name: str = "") -> str:
                      f"worst δ = {r['delta']:.6f} at e = {r['worst_eccentricity']:.4f}; least "
                      f"transmission angle {r['min_transmission_angle_deg']:.2f} deg at e = "
                      f"{r['angle_eccentricity']:.4f}")
+    if result.quantities:
+        from .quantities import get_quantity
+        lines.append("")
+        lines.append("quantities (worst over the listed eccentricities; the ratio at e = 1):")
+        for name, value in result.quantities["values"].items():
+            q = get_quantity(name)
+            unit = "" if q.unit == "-" else f" {q.unit}"
+            lines.append(f"  {name:<20} {value:12.6g}{unit}")
     if result.constraints:
         lines.append("")
         lines.append("constraints of the problem file:")

@@ -135,10 +135,21 @@ def unit_of(key: str, variables: Mapping[str, str] | None = None) -> str | None:
         return variables[key]
     if key in UNITS:
         return UNITS[key]
+    quantity = _quantity_units().get(key)
+    if quantity is not None:
+        return quantity
     for suffix, unit in sorted(SUFFIX_UNITS.items(), key=lambda s: -len(s[0])):
         if key.endswith(suffix):
             return unit
     return None
+
+
+def _quantity_units() -> dict[str, str]:
+    """The unit of every quantity by name (:mod:`optdesign.quantities`), the ratio's with its
+    convention."""
+    from .quantities import get_quantity, known
+
+    return {name: get_quantity(name).unit for name in known()} | {"ratio": RATIO_UNIT}
 
 
 def units_of(document, variables: Mapping[str, str] | None = None) -> dict[str, str]:

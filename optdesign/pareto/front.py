@@ -15,6 +15,16 @@ LEAD = ["phases", "delta", "ratio"]
 TAIL = ["status", "min_transmission_angle_deg", "pin_radius", "ratio_multiplier", "epsilon",
         "kind", "count_front", "non_dominated", "binding", "ipopt_status", "iterations",
         "time_s", "round", "start_from", "merged"]
+#: quantities with columns of their own already: delta, ratio, min_transmission_angle_deg
+ENVELOPE_QUANTITIES = ("ratio", "ripple", "transmission_angle")
+
+
+def quantity_columns() -> list[str]:
+    """Every other quantity (optdesign.quantities) is a column of its own, its worst over
+    the listed eccentricities."""
+    from ..quantities import known
+
+    return [name for name in known() if name not in ENVELOPE_QUANTITIES]
 
 
 def frame(records: list[dict], lengths: list[str]):
@@ -35,9 +45,11 @@ def frame(records: list[dict], lengths: list[str]):
             continue
         row = {k: r.get(k) for k in LEAD + TAIL if k in r}
         row.update({k: r["design"].get(k) if r["design"] else None for k in lengths})
+        values = (r.get("quantities") or {}).get("values", {})
+        row.update({k: values.get(k) for k in quantity_columns()})
         row["index"] = r["key"][1]
         rows.append(row)
-    df = pd.DataFrame(rows, columns=LEAD + list(lengths) + TAIL + ["index"])
+    df = pd.DataFrame(rows, columns=LEAD + list(lengths) + TAIL + quantity_columns() + ["index"])
     df["count_front"] = False
     df["non_dominated"] = False
     if len(df):
@@ -99,7 +111,8 @@ class ParetoResult(Tabular):
         from ..units import stamped
 
         df = self.points.replace({np.nan: None})
-        lengths = [c for c in self.points.columns if c not in LEAD + TAIL + ["index"]]
+        lengths = [c for c in self.points.columns
+                   if c not in LEAD + TAIL + quantity_columns() + ["index"]]
         # a design holds the lengths and the count ("phases" here, "sections" in an end's
         # design of the slotted lever)
         counts = {k for end in self.ends for k in (end.get("design") or {})} - set(lengths)

@@ -16,6 +16,7 @@ from typing import Any
 from ..errors import OptDesignError
 from ..solve import PhaseSolver, solve_phase
 from ..criteria import LengthConstraint, constraints_of
+from ..quantities import design_quantities
 from ..sensitivity import sensitivity_record
 from ..solve.starts import start_designs
 
@@ -80,6 +81,7 @@ class _Point:
                 "min_transmission_angle_deg": figures.min_angle_deg if exact else None,
                 "sensitivities": sensitivity_record(
                     problem, design, getattr(figures, "evaluation", None)) if exact else None,
+                "quantities": _quantities(problem, figures) if exact else None,
                 **{k: (v if feasible else None) for k, v in columns.items()},
                 "ratio_multiplier": multiplier,
                 "binding": "; ".join(a["name"] for a in active or []),
@@ -243,14 +245,24 @@ def copy_end(end: dict, index: int) -> dict:
                   "epsilon": end["ratio"] if end["epsilon"] is None else end["epsilon"]}
 
 
+def _quantities(problem, figures) -> dict:
+    """The exact quantities of a verified point: a PhaseResult's own, else from the
+    verification's evaluation."""
+    known = getattr(figures, "quantities", None)
+    if known is not None:
+        return known
+    return design_quantities(problem, getattr(figures, "evaluation", None))
+
+
 @dataclass(frozen=True)
 class _Ver:
-    """The three exact figures of a PhaseResult, shaped like a Verification."""
+    """The exact figures of a PhaseResult, shaped like a Verification."""
 
     delta: float
     ratio: float
     min_angle_deg: float
+    quantities: dict
 
     @classmethod
     def of(cls, res) -> "_Ver":
-        return cls(res.delta, res.ratio, res.min_transmission_angle_deg)
+        return cls(res.delta, res.ratio, res.min_transmission_angle_deg, res.quantities)

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..criteria import objective_of
 from ..mechanisms import STROKE_SIGNS
+from ..quantities import design_quantities
 from ..sensitivity import sensitivity_record
 from .accuracy import solve_accuracy
 from .nlp import SECONDARY_BUDGET, Held, PhaseNLP, is_robust
@@ -537,6 +538,7 @@ def _fill(result: PhaseResult, problem, outcome: Outcome) -> PhaseResult:
         result.worst_case_min_transmission_angle_deg = angle.value
     result.active = outcome.record.active
     result.sensitivities = sensitivity_record(problem, design, ver.evaluation)
+    result.quantities = design_quantities(problem, ver.evaluation)
     result.message = ""
     return result
 
@@ -574,6 +576,7 @@ def solve(problem, progress=None) -> SolveResult:
         min_transmission_angle_deg=best.min_transmission_angle_deg if best else None,
         worst_eccentricity=best.worst_eccentricity if best else None,
         worst_case_delta=best.worst_case_delta if best else None,
+        quantities=best.quantities if best else {},
         solve_time_s=time.perf_counter() - t0,
         iterations=sum(p.iterations for p in per_phase),
         per_phase=per_phase,

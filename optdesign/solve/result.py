@@ -57,6 +57,9 @@ class PhaseResult:
     #: a robust solve: the tolerance box's worst δ and least transmission angle of the optimum
     worst_case_delta: float | None = None
     worst_case_min_transmission_angle_deg: float | None = None
+    #: every quantity's exact value of the optimum (:func:`optdesign.quantities.quantities_of`:
+    #: ``values`` and ``per_eccentricity``); empty without an optimum
+    quantities: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -91,6 +94,8 @@ class SolveResult(Tabular):
     worst_eccentricity: float | None = None
     #: a robust solve: the best design's worst δ over the tolerance box (its objective)
     worst_case_delta: float | None = None
+    #: every quantity's exact value of the best design (see PhaseResult.quantities)
+    quantities: dict = field(default_factory=dict)
 
     def best_phase(self) -> PhaseResult | None:
         if self.design is None:

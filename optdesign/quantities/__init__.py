@@ -1,0 +1,85 @@
+"""Quantities: one vocabulary for every figure of a design that a criterion, a front or a
+report names (:mod:`optdesign.quantities.base`).
+
+Every module of this package that defines a :class:`~optdesign.quantities.base.Quantity`
+subclass with a ``name`` contributes it: a new quantity is one new module here, found by
+:func:`known` with nothing else to edit.
+"""
+from __future__ import annotations
+
+import importlib
+import pkgutil
+from functools import lru_cache
+
+from .base import Quantity, TurnQuantity
+
+__all__ = ["Quantity", "TurnQuantity", "design_quantities", "get_quantity", "known",
+           "quantities_of"]
+
+
+@lru_cache(maxsize=1)
+def _registry() -> dict[str, Quantity]:
+    found: dict[str, Quantity] = {}
+    for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
+        if info.name in ("base", "extremes"):
+            continue
+        module = importlib.import_module(f"{__name__}.{info.name}")
+        for value in vars(module).values():
+            if isinstance(value, type) and issubclass(value, Quantity) and value.name and \
+                    value.__module__ == module.__name__:
+                found[value.name] = value()
+    return found
+
+
+def known() -> tuple[str, ...]:
+    """The names of every quantity, in order."""
+    return tuple(sorted(_registry()))
+
+
+def get_quantity(name: str) -> Quantity:
+    """The quantity ``name`` (KeyError naming the known ones)."""
+    try:
+        return _registry()[name]
+    except KeyError:
+        raise KeyError(f"unknown quantity {name!r}; known: {', '.join(known())}") from None
+
+
+def quantities_of(evaluation, eccentricities, ripple: str = "midrange",
+                  names=None) -> dict:
+    """Every quantity's exact value (or those ``names``) of an evaluated design:
+    ``{"values": {name: value}, "per_eccentricity": [{"eccentricity": e, name: value}]}``.
+
+    ``values`` holds what a criterion reads: the value at the quantity's own eccentricity
+    (:attr:`~optdesign.quantities.base.Quantity.at`: the ratio's is e = 1) or else the worst
+    over ``eccentricities`` (and, for the ripple and the transmission angle, over the
+    regulation interval when the evaluation searched it)."""
+    names = tuple(n for n in (names or known())
+                  if get_quantity(n).defined_for(evaluation.design))
+    rows = []
+    for e in eccentricities:
+        row = {"eccentricity": float(e)}
+        for name in names:
+            row[name] = float(get_quantity(name).exact(evaluation, e, ripple))
+        rows.append(row)
+    values = {}
+    for name in names:
+        q = get_quantity(name)
+        values[name] = float(q.exact(evaluation, q.at, ripple)) if q.at is not None else \
+            q.worst_of([r[name] for r in rows])
+    interval = evaluation.worst
+    if interval is not None:
+        if "ripple" in values and evaluation.worst_definition == ripple:
+            values["ripple"] = max(values["ripple"], interval.delta)
+        if "transmission_angle" in values:
+            values["transmission_angle"] = min(values["transmission_angle"],
+                                               interval.min_angle_deg)
+    return {"values": values, "per_eccentricity": rows}
+
+
+def design_quantities(problem, evaluation) -> dict:
+    """:func:`quantities_of` an evaluation of the problem's design at its listed
+    eccentricities, its ripple by the problem's definition (empty when it does not
+    assemble)."""
+    if evaluation is None or not evaluation.assembles:
+        return {}
+    return quantities_of(evaluation, problem.eccentricities, problem.objective.ripple)

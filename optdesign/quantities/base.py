@@ -1,0 +1,167 @@
+"""A quantity: a named figure of a design over the crank turn, defined once.
+
+Every figure the tool optimises, bounds or reports is a :class:`Quantity`: its name (the key of
+the problem file, the JSON documents and the tables), its unit and label, and its exact value
+at one eccentricity of an evaluated design. Values at several eccentricities combine into the
+*worst* by :attr:`Quantity.worst` (the largest ripple, the least transmission angle).
+
+:class:`TurnQuantity` is the kind a new quantity usually is: the extremes over the turn of a
+per-angle expression of the mechanism's CasADi model (joint positions, θ, dθ/dφ, d²θ/dφ²),
+reduced to one value. It is written once, as that expression and that reduction, and serves
+
+* the exact evaluation (:meth:`TurnQuantity.exact`): each component's maximum over the turn at
+  a stationary point found by Brent's method (:mod:`optdesign.quantities.extremes`);
+* the NLP (:meth:`TurnQuantity.function`, :meth:`TurnQuantity.components`): the same
+  expression held at exact stationary points, as the peak speed and the transmission angle
+  are (:mod:`optdesign.solve.nlp`);
+* the screening (:meth:`TurnQuantity.sampled`): the grid's maxima of the same expression.
+"""
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+from typing import ClassVar
+
+import casadi as ca
+import numpy as np
+
+from .extremes import turn_maxima
+
+#: how a quantity's values combine: into its worst, and across its components
+COMBINE = {"max": max, "min": min}
+
+
+class Quantity:
+    """A named figure of a design: ``value = exact(evaluation, e)``.
+
+    ``worst`` is ``"max"`` when a larger value is worse (ripple, housing radius) and
+    ``"min"`` when a smaller one is (transmission angle, ratio, swing): the worst over the
+    listed eccentricities, and the side a bound naturally takes (an upper bound on a "max"
+    quantity, a lower one on a "min" quantity).
+    """
+
+    name: ClassVar[str] = ""
+    unit: ClassVar[str] = "-"
+    label: ClassVar[str] = ""
+    meaning: ClassVar[str] = ""
+    worst: ClassVar[str] = "max"
+    #: the eccentricity a criterion reads it at by default (None: the worst over the listed
+    #: ones)
+    at: ClassVar[float | None] = None
+
+    def exact(self, evaluation, eccentricity: float, ripple: str = "midrange") -> float:
+        """The exact value of the evaluated design at ``eccentricity`` (one it was
+        evaluated at)."""
+        raise NotImplementedError
+
+    def defined_for(self, design) -> bool:
+        """Whether the quantity means something for ``design``'s mechanism (a linkage
+        without moving joints has no housing radius)."""
+        return True
+
+    def worst_of(self, values) -> float:
+        """The worst of several values (e.g. over the listed eccentricities)."""
+        return float(COMBINE[self.worst](values))
+
+    def natural_side(self) -> str:
+        """``upper`` for a quantity whose larger values are worse, else ``lower``."""
+        return "upper" if self.worst == "max" else "lower"
+
+    def __repr__(self) -> str:
+        return f"<quantity {self.name} [{self.unit}]>"
+
+
+class TurnQuantity(Quantity):
+    """The extremes over the turn of a per-angle expression, reduced to one value.
+
+    A subclass writes :meth:`expression` (the components g(φ) whose maxima over the turn are
+    wanted, from the mechanism's model) and :meth:`components` (the maxima, a CasADi or NumPy
+    vector, to the figures whose ``worst`` is the quantity's value).
+    """
+
+    def expression(self, model: dict, phi, p: dict, count: int):
+        """The components g(φ) (a list of SX scalars) from the mechanism's ``model``
+        (``chain_expressions``: ``theta``, ``joints``; plus ``dtheta`` and ``ddtheta``)."""
+        raise NotImplementedError
+
+    def components(self, maxima, input_speed: float):
+        """The figures whose worst is the value, from the components' maxima (a NumPy array
+        or a CasADi column: only arithmetic)."""
+        return maxima
+
+    # ------------------------------------------------------------------ built once
+    def function(self, mechanism, count: int, options: tuple = ()):
+        """(φ, p) -> g and (φ, p) -> dg/dφ of ``mechanism`` (built once per count)."""
+        return _functions(self, mechanism, count, options)
+
+    def defined_for(self, design) -> bool:
+        return self.function(design.model, design.count, design.option_key)[0].numel_out(0) > 0
+
+    # ------------------------------------------------------------------ its forms
+    def tracked(self, mechanism, count: int, options: tuple = ()):
+        """(φ (one angle per component), p) -> (g_i(φ_i), dg_i/dφ(φ_i)): each component at
+        an angle of its own, what the NLP holds at the components' stationary points."""
+        return _tracked(self, mechanism, count, options)
+
+    def maxima(self, design, eccentricity: float = 1.0):
+        """Each component's maximum over the turn, exactly (:func:`turn_maxima`),
+        remembered for the designs evaluated last (a solve's check and its next start)."""
+        from ..exact import search_grid
+
+        key = (self.name, design.mechanism, design.option_key,
+               tuple(sorted(design.values.items())), float(eccentricity))
+        known = _MAXIMA.get(key)
+        if known is None:
+            g, dg = self.function(design.model, design.count, design.option_key)
+            breaks = sorted({float(b) % (2 * math.pi)
+                             for b in design.breakpoints(eccentricity)})
+            known = turn_maxima(g, dg, design.p_fixed(eccentricity),
+                                search_grid(design, eccentricity), breaks)
+            if len(_MAXIMA) >= _MAXIMA_SIZE:
+                _MAXIMA.pop(next(iter(_MAXIMA)))
+            _MAXIMA[key] = known
+        return known
+
+    def exact(self, evaluation, eccentricity, ripple="midrange"):
+        maxima = self.maxima(evaluation.design, eccentricity).values
+        figures = np.asarray(self.components(maxima, evaluation.input_speed), dtype=float)
+        return self.worst_of(figures)
+
+    def sampled(self, grid: np.ndarray, input_speed: float) -> np.ndarray:
+        """The value from g sampled at (components, [designs,] angles): the screening's
+        form, at most the exact one for a "max" quantity."""
+        figures = np.asarray(self.components(grid.max(axis=-1), input_speed))
+        return figures.max(axis=0) if self.worst == "max" else figures.min(axis=0)
+
+
+#: the maxima of the designs evaluated last, oldest first
+_MAXIMA: dict = {}
+_MAXIMA_SIZE = 256
+
+
+@lru_cache(maxsize=256)
+def _tracked(quantity: TurnQuantity, mechanism, count: int, options: tuple):
+    g, dg = _functions(quantity, mechanism, count, options)
+    m = g.numel_out(0)
+    phi = ca.SX.sym("phi", m)
+    pvec = ca.SX.sym("p", len(mechanism.lengths))
+    values = [g.call([phi[i], pvec], True, False)[0][i] for i in range(m)]
+    slopes = [dg.call([phi[i], pvec], True, False)[0][i] for i in range(m)]
+    return ca.Function(f"tracked_{quantity.name}_{mechanism.name}_n{count}", [phi, pvec],
+                       [ca.vertcat(*values), ca.vertcat(*slopes)])
+
+
+@lru_cache(maxsize=256)
+def _functions(quantity: TurnQuantity, mechanism, count: int, options: tuple):
+    opts = mechanism.default_options() | dict(options)
+    phi = ca.SX.sym("phi")
+    pvec = ca.SX.sym("p", len(mechanism.lengths))
+    p = {name: pvec[i] for i, name in enumerate(mechanism.lengths)}
+    model = dict(mechanism.chain_expressions(phi, p, count, opts))
+    theta = ca.vertcat(*model["theta"])
+    model["dtheta"] = ca.jacobian(theta, phi)
+    model["ddtheta"] = ca.jacobian(model["dtheta"], phi)
+    g = ca.vertcat(*quantity.expression(model, phi, p, count))
+    name = f"{quantity.name}_{mechanism.name}_n{count}"
+    return (ca.Function(name, [phi, pvec], [g]),
+            ca.Function(f"d_{name}", [phi, pvec], [ca.jacobian(g, phi)]))

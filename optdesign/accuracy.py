@@ -155,6 +155,7 @@ def surrogate_figures(problem, values, samples: int, smoothing: float):
     fixed = replace(fixed, solver=replace(problem.solver, samples=samples, smoothing=smoothing),
                     objective=replace(problem.objective, minimize="ripple", min_ratio=0.0,
                                       robust="none"),
+                    constraints=replace(problem.constraints, quantities=()),
                     eccentricities=(1.0,), eccentricity_range=None)
     count = int(round(values[problem.model.count_variable]))
     solver = PhaseSolver(fixed, count)

@@ -13,8 +13,12 @@ computed anew for every solve (a Pareto sweep's ε is a bound, not a rebuild of 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Any, Mapping
+
+from .quantities import TurnQuantity, get_quantity, known, quantities_of
+from .quantities.bounds import QuantityBound
 
 #: weight of the worst ripple in the largest-ratio objective: a lexicographic tie-break that
 #: keeps w_hi and w_lo tight when the ripple cap is slack (the surrogate δ stays exact) for
@@ -26,6 +30,8 @@ TOL_RATIO = 1e-7
 #: length constraints, relative to the design's longest length: 4e-5 mm at 400 mm, far below
 #: any manufacturing tolerance, and the same in any unit
 TOL_LENGTH_REL = 1e-7
+#: bounds on quantities, relative to the value (at least 1 in its unit)
+TOL_QUANTITY_REL = 1e-7
 
 
 @dataclass(frozen=True)
@@ -38,13 +44,40 @@ class Measured:
     peak_speed: float                 # ω_max of the problem's stroke at e = 1, rad/s
     min_angle_deg: float
     evaluation: Any
+    #: the exact value of every quantity a bound or the objective of the problem names, by
+    #: the bound's key (:attr:`QuantityBound.key`)
+    quantities: Mapping[str, float] = field(default_factory=dict)
 
     @classmethod
     def of(cls, problem, ev) -> "Measured":
         lengths = {k: float(ev.design.values[k]) for k in problem.model.lengths}
         listed = problem.eccentricities
         return cls(lengths, ev.ratio, ev.ripple(problem.objective.ripple, listed),
-                   ev.figures.omega_max, ev.min_angle_deg, ev)
+                   ev.figures.omega_max, ev.min_angle_deg, ev,
+                   measured_quantities(problem, ev))
+
+
+def quantity_specs(problem) -> list[QuantityBound]:
+    """The quantities the problem's criteria read beyond the envelope's own: its bounds on
+    quantities and its quantity objective, each once by key."""
+    specs = list(problem.constraints.quantities)
+    objective = objective_of(problem)
+    if isinstance(objective, QuantityObjective):
+        specs.append(QuantityBound(objective.quantity))
+    return list({s.key: s for s in specs}.values())
+
+
+def measured_quantities(problem, ev) -> dict[str, float]:
+    """The exact value of every :func:`quantity_specs` of ``problem`` on the evaluation."""
+    out = {}
+    ripple = problem.objective.ripple
+    for spec in quantity_specs(problem):
+        if spec.at is None:
+            out[spec.key] = quantities_of(ev, problem.eccentricities, ripple,
+                                          names=(spec.name,))["values"][spec.name]
+        else:
+            out[spec.key] = float(get_quantity(spec.name).exact(ev, spec.at, ripple))
+    return out
 
 
 # --------------------------------------------------------------------------- constraints
@@ -154,6 +187,28 @@ class LengthConstraint(Constraint):
         return TOL_LENGTH_REL * max(abs(v) for v in m.lengths.values())
 
 
+class QuantityConstraint(Constraint):
+    """``lower <= value <= upper`` of a quantity (``constraints: {QUANTITY: {...}}``): the
+    NLP holds it at the quantity's epigraph, which bounds every tracked extreme
+    (:mod:`optdesign.solve.nlp`); the exact check reads the quantity's exact form."""
+
+    def __init__(self, spec: QuantityBound):
+        self.spec = spec
+        self.name = spec.key
+        self.unit = get_quantity(spec.name).unit
+        self.column = spec.key
+
+    def value(self, q):
+        return q.quantities[self.spec.key]
+
+    def bounds(self, problem, tightening_deg=0.0):
+        return self.spec.lower, self.spec.upper
+
+    def tolerance(self, m):
+        """Relative to the value: the NLP holds the bound to IPOPT's tolerance."""
+        return TOL_QUANTITY_REL * max(1.0, abs(float(self.value(m))))
+
+
 class SectionConstraint(Constraint):
     """A constraint a problem-file section contributes (e.g. the driveline's speed limit):
     the section gives the symbolic rows from the peak output speed and checks the design."""
@@ -181,6 +236,7 @@ def constraints_of(problem) -> list[Constraint]:
     out: list[Constraint] = [TransmissionAngle(), RatioFloor()]
     out += objective_of(problem).constraints(problem)
     out += problem.model.criteria(problem.constraints, problem.options)
+    out += [QuantityConstraint(spec) for spec in problem.constraints.quantities]
     for key, section in problem.sections.items():
         if hasattr(section, "solve_constraints"):
             out.append(SectionConstraint(key, section, problem))
@@ -192,6 +248,8 @@ class Objective:
     """What the NLP minimises, and the key that ranks verified designs (lower is better)."""
 
     name: str = ""
+    #: how the reports write the objective (in d OBJECTIVE / d bound)
+    symbol: str = ""
     #: ``objective:`` keys this objective needs besides ``minimize``
     requires: tuple[str, ...] = ()
 
@@ -207,14 +265,21 @@ class Objective:
         """The ranking key of a design with worst ripple ``delta`` and ratio ``ratio``."""
         raise NotImplementedError
 
-    def key(self, m: Measured) -> float:
+    def key(self, m) -> float:
+        """The ranking key of a measured design (:class:`Measured`, exact) or of the
+        screening's sampled arrays (the same names)."""
         return self.rank(m.worst_ripple, m.ratio)
+
+    def result_key(self, result) -> float:
+        """The ranking key of a count's optimum (a PhaseResult)."""
+        return self.rank(result.delta, result.ratio)
 
 
 class LeastRipple(Objective):
     """The worst δ over the listed eccentricities."""
 
     name = "ripple"
+    symbol = "δ"
 
     def expression(self, q):
         return q.worst_ripple
@@ -227,6 +292,7 @@ class LargestRatio(Objective):
     """The ratio, under the ripple cap; the worst δ breaks ties lexicographically."""
 
     name = "-ratio"
+    symbol = "(-ratio)"
 
     def expression(self, q):
         return -q.ratio + RIPPLE_TIE_BREAK * q.worst_ripple
@@ -240,9 +306,57 @@ class LargestRatio(Objective):
         return -ratio
 
 
-#: the objectives ``objective.minimize`` may name
+class QuantityObjective(Objective):
+    """The worst of a quantity over the listed eccentricities: least when larger is worse
+    (``minimize: housing_radius``), largest when smaller is (``minimize: -swing``); the
+    worst δ breaks ties, as for the largest ratio."""
+
+    quantity: str = ""
+
+    @property
+    def sign(self) -> float:
+        return 1.0 if get_quantity(self.quantity).worst == "max" else -1.0
+
+    def expression(self, q):
+        return self.sign * q.quantities[self.quantity] + RIPPLE_TIE_BREAK * q.worst_ripple
+
+    def key(self, m):
+        return self.sign * m.quantities[self.quantity]
+
+    def result_key(self, result):
+        return self.sign * result.quantities["values"][self.quantity]
+
+
+def _quantity_objectives() -> dict[str, type[Objective]]:
+    """``minimize: NAME`` for every quantity tracked over the turn whose larger values are
+    worse, ``minimize: -NAME`` for those whose smaller ones are."""
+    return _objectives_of(known())
+
+
+@lru_cache(maxsize=8)
+def _objectives_of(names: tuple[str, ...]) -> dict[str, type[Objective]]:
+    out: dict[str, type[Objective]] = {}
+    for name in names:
+        q = get_quantity(name)
+        if isinstance(q, TurnQuantity):
+            key = name if q.worst == "max" else f"-{name}"
+            out[key] = type(f"Objective_{name}", (QuantityObjective,),
+                            {"quantity": name, "name": key,
+                             "symbol": name if q.worst == "max" else f"(-{name})",
+                             "__doc__": f"{'Least' if q.worst == 'max' else 'Largest'} "
+                                        f"{q.label}."})
+    return out
+
+
+#: the objectives ``objective.minimize`` may name besides the quantities' own
 OBJECTIVES: dict[str, type[Objective]] = {"ripple": LeastRipple, "-ratio": LargestRatio}
 
 
+def objectives() -> dict[str, type[Objective]]:
+    """Every name ``objective.minimize`` takes: :data:`OBJECTIVES` and one per quantity
+    tracked over the turn (the registry as it is now)."""
+    return OBJECTIVES | _quantity_objectives()
+
+
 def objective_of(problem) -> Objective:
-    return OBJECTIVES[problem.objective.minimize]()
+    return objectives()[problem.objective.minimize]()

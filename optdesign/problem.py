@@ -16,10 +16,13 @@ from importlib import import_module
 from pathlib import Path
 from typing import Any, Mapping
 
-from .criteria import OBJECTIVES
+from .criteria import objectives
 from .declarations import REQUIRED, Key, names
 from .errors import ProblemError, shown
 from .mechanisms import STROKE_SIGNS, get_mechanism, known
+from .quantities import known as known_quantities
+from .quantities.bounds import ALIASES, read_bound
+from .quantities.bounds import declarations as quantity_declarations
 
 #: Optional sections parsed by the module that owns them, imported only when present:
 #: name -> "module:function(section_dict, where) -> parsed object".
@@ -93,6 +96,9 @@ class Constraints:
     assembly_margin: float = 1e-3       # 1 - cos²μ >= margin at every sample
     grashof: bool = False               # chain 1 a crank-rocker: s + l <= p + q
     extra: Mapping[str, Any] = field(default_factory=dict)   # keys other modules own
+    #: bounds on quantities (``constraints: {QUANTITY: {lower, upper, at}}``) other than the
+    #: three that stand for older keys (optdesign.quantities.bounds)
+    quantities: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -150,8 +156,10 @@ TOP_KEYS = names(TOP_DECLARATIONS)
 
 OBJECTIVE_KEYS: tuple[Key, ...] = (
     Key("minimize", "choice", "what the solve minimises: ripple (δ, the worst over the listed "
-        "eccentricities) or -ratio (the largest ratio with δ at most max_ripple)",
-        default=Objective.minimize, choices=lambda: tuple(OBJECTIVES)),
+        "eccentricities), -ratio (the largest ratio with δ at most max_ripple), or a quantity's "
+        "worst over the listed eccentricities: housing_radius, peak_acceleration, or -swing "
+        "(the largest least swing)",
+        default=Objective.minimize, choices=lambda: tuple(objectives())),
     Key("ripple", "choice", "the denominator of δ = (ω_max − ω_min)/ω_mid: midrange, "
         "(ω_max + ω_min)/2 as in the papers, or mean, the time mean of the output speed",
         default=Objective.ripple, choices=RIPPLE_DEFINITIONS),
@@ -194,7 +202,7 @@ CONSTRAINT_KEYS: tuple[Key, ...] = (
         "most this fraction of its first critical speed (docs/driveline.md)", unit="-",
         default=None, default_text="none", lower=0, upper=1, open_lower=True, open_upper=True,
         example=0.7, condition="with a driveline: section"),
-)
+) + quantity_declarations()
 
 REGULATION_KEYS: tuple[Key, ...] = (
     Key("eccentricity", "either", "the fractions e of the regulated length (l1, L, r1) at "
@@ -347,9 +355,11 @@ def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "pro
 
     design = _read_design(r, top, mech)
     options = _read_options(r, top.get("options", {}), mech)
-    constraints = _read_constraints(r, top.get("constraints", {}), mech)
-    objective = _read_objective(r, top.get("objective", {}))
     ecc, ecc_range = _read_regulation(r, top.get("regulation", {}))
+    constraints = _read_constraints(r, top.get("constraints", {}), mech, ecc)
+    objective = _read_objective(r, top.get("objective", {}))
+    constraints, objective = _quantity_aliases(r, top, constraints, objective)
+    _check_required(r, objective)
     solver = _read_solver(r, top.get("solver", {}))
     sections = {}
     for key, target in SECTION_PARSERS.items():
@@ -358,6 +368,7 @@ def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "pro
             sections[key] = getattr(import_module(module), func)(top[key], r.sub(key))
     if objective.robust == "worst_case":
         _check_robust(r, objective, ecc_range, sections)
+    _check_quantity_criteria(r, constraints, objective, ecc_range)
     for key in constraints.extra:
         owner = EXTRA_CONSTRAINT_SECTIONS.get(key)
         if owner is not None and owner not in sections:
@@ -534,14 +545,62 @@ def _read_options(r, raw, mech) -> dict[str, str]:
     return options
 
 
-def _read_constraints(r, raw, mech) -> Constraints:
+def _read_constraints(r, raw, mech, eccentricities) -> Constraints:
     raw = r.mapping(raw, "constraints")
     own = GENERAL_CONSTRAINT_KEYS | set(mech.constraint_keys)
-    r.known_keys(raw, "constraints", own | EXTRA_CONSTRAINT_KEYS)
+    quantities = set(known_quantities())
+    r.known_keys(raw, "constraints", own | EXTRA_CONSTRAINT_KEYS | quantities)
     kw = {k.name: k.read(r, raw[k.name], f"constraints.{k.name}") for k in CONSTRAINT_KEYS
           if k.name in own and k.name in raw}
+    kw["quantities"] = tuple(read_bound(r, k, raw[k], eccentricities)
+                             for k in sorted(quantities) if k in raw)
     kw["extra"] = {k: v for k, v in raw.items() if k in EXTRA_CONSTRAINT_KEYS}
     return Constraints(**kw)
+
+
+def _quantity_aliases(r, top, constraints: Constraints, objective: Objective):
+    """The bounds that stand for older keys, moved there (optdesign.quantities.bounds:
+    ``ratio.lower``, ``transmission_angle.lower``, and ``ripple.upper`` under minimize:
+    -ratio); giving both names of one bound is an error."""
+    given = {"objective": top.get("objective") or {}, "constraints": top.get("constraints") or {}}
+    kept, moved = [], {"objective": {}, "constraints": {}}
+    for spec in constraints.quantities:
+        rest = spec
+        for side in ("lower", "upper"):
+            alias = ALIASES.get((spec.name, side))
+            value = getattr(spec, side)
+            if alias is None or not math.isfinite(value) or spec.at is not None:
+                continue
+            if spec.name == "ripple" and objective.minimize != "-ratio":
+                continue                # a cap on the least ripple: a bound of its own
+            section, key = alias
+            if key in given[section]:
+                raise r.error(f"constraints.{spec.name}.{side}",
+                              f"and {section}.{key} name the same bound: give one")
+            moved[section][key] = value
+            rest = replace(rest, **{side: math.inf if side == "upper" else -math.inf})
+        if math.isfinite(rest.lower) or math.isfinite(rest.upper):
+            kept.append(rest)
+    constraints = replace(constraints, quantities=tuple(kept), **moved["constraints"])
+    return constraints, replace(objective, **moved["objective"])
+
+
+def _check_quantity_criteria(r, constraints: Constraints, objective: Objective,
+                             ecc_range) -> None:
+    """Bounds on quantities and a quantity objective are held at the listed eccentricities
+    of a nominal solve: not yet over a regulation interval nor in a robust solve."""
+    named = [f"constraints.{spec.name}" for spec in constraints.quantities]
+    if objective.minimize.lstrip("-") in known_quantities() and \
+            objective.minimize not in ("ripple", "-ratio"):
+        named.append("objective.minimize")
+    if not named:
+        return
+    if ecc_range is not None:
+        raise r.error(named[0], "is held at listed eccentricities; with a regulation "
+                                "interval only the ripple, the ratio and the transmission "
+                                "angle are (list the eccentricities instead)")
+    if objective.robust == "worst_case":
+        raise r.error(named[0], "is not yet held over a tolerance box (robust: worst_case)")
 
 
 def _read_objective(r, raw) -> Objective:
@@ -549,12 +608,16 @@ def _read_objective(r, raw) -> Objective:
     r.known_keys(raw, "objective", names(OBJECTIVE_KEYS))
     kw = {k.name: k.read(r, raw[k.name], f"objective.{k.name}") for k in OBJECTIVE_KEYS
           if k.name in raw}
-    if "minimize" in kw:
-        for key in OBJECTIVES[kw["minimize"]].requires:
-            if key not in raw:
-                raise r.error(f"objective.{key}",
-                              f"is required when minimize is {kw['minimize']}")
     return Objective(**kw)
+
+
+def _check_required(r, objective: Objective) -> None:
+    """The keys the objective needs (``max_ripple`` with ``-ratio``), given by their own
+    name or by a bound that stands for them (``constraints.ripple.upper``)."""
+    for key in objectives()[objective.minimize].requires:
+        if getattr(objective, key) is None:
+            raise r.error(f"objective.{key}", f"is required when minimize is "
+                                              f"{objective.minimize}")
 
 
 def _read_regulation(r, raw) -> tuple[tuple[float, ...], tuple[float, float] | None]:

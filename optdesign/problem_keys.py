@@ -42,8 +42,11 @@ def option_keys(mech) -> tuple[Key, ...]:
 
 def constraint_keys(mech) -> tuple[Key, ...]:
     """The ``constraints:`` keys a file with this mechanism may give: the general ones, the
-    mechanism's own (``constraint_keys``) and those of the sections."""
-    accepted = GENERAL_CONSTRAINT_KEYS | set(mech.constraint_keys) | EXTRA_CONSTRAINT_KEYS
+    mechanism's own (``constraint_keys``), those of the sections and a bound per quantity."""
+    from .quantities import known as known_quantities
+
+    accepted = GENERAL_CONSTRAINT_KEYS | set(mech.constraint_keys) | EXTRA_CONSTRAINT_KEYS | \
+        set(known_quantities())
     missing = accepted - {k.name for k in CONSTRAINT_KEYS}
     if missing:
         raise LookupError(f"constraint keys {sorted(missing)} of {mech.name} are not declared "

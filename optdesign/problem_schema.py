@@ -51,10 +51,10 @@ def _mechanism_rule(name: str) -> dict:
 def _objective_rules(keys) -> list[dict]:
     """``objective.max_ripple`` (and whatever else an objective ``requires``) when
     ``objective.minimize`` names that objective."""
-    from .criteria import OBJECTIVES
+    from .criteria import objectives
 
     out = []
-    for name, objective in OBJECTIVES.items():
+    for name, objective in objectives().items():
         if objective.requires:
             out.append({"if": {"properties": {"objective": {
                 "properties": {"minimize": {"const": name}}, "required": ["minimize"]}},

@@ -115,8 +115,13 @@ def _constraints(names) -> str:
         for key in {k.name: k for k in problem_keys(name)}["constraints"].keys:
             keys[key.name] = key
             owners.setdefault(key.name, []).append(name)
-    table = _table(list(keys.values()), extra=("mechanisms", lambda k: ", ".join(
-        f"`{m}`" for m in owners[k.name]) if len(owners[k.name]) < len(names) else "every"))
+    def mechanisms(k) -> str:          # a nested key (a bound's lower) belongs to its parent
+        if k.name not in owners:
+            return ""
+        return ", ".join(f"`{m}`" for m in owners[k.name]) \
+            if len(owners[k.name]) < len(names) else "every"
+
+    table = _table(list(keys.values()), extra=("mechanisms", mechanisms))
     return ("## `constraints:`\n\nThe design's constraints, held at every listed eccentricity "
             "by the solve and checked exactly by `analyze`; every key optional. A key the "
             "file's mechanism does not declare is refused.\n\n" + table)

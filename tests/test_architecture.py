@@ -152,3 +152,67 @@ def test_a_new_section_is_one_parser_and_one_registry_line(monkeypatch, tmp_path
     data["rpm"] = {"digits": "two"}
     with pytest.raises(ProblemError, match=r"rpm\.digits must be an integer"):
         problem_from_dict(data, where="p.yaml")
+
+
+# --------------------------------------------------------------------------- a new quantity
+DEPTH_MODULE = '''
+import casadi as ca
+
+from optdesign.quantities.base import TurnQuantity
+
+
+class Depth(TurnQuantity):
+    name, unit, label, worst = "depth", "mm", "depth below O (mm)", "max"
+    meaning = "largest depth of any moving joint below the crank centre O over a turn"
+
+    def expression(self, model, phi, p, count):
+        return [-point[1] for point in model["joints"].values() if ca.depends_on(point, phi)]
+'''
+
+
+@pytest.fixture
+def depth_quantity(tmp_path, monkeypatch):
+    """The worked example of docs/architecture.md: one module in the quantities package
+    (here a folder added to the package's path) and nothing else."""
+    import optdesign.quantities as quantities
+
+    folder = tmp_path / "more_quantities"
+    folder.mkdir()
+    (folder / "depth.py").write_text(DEPTH_MODULE)
+    monkeypatch.setattr(quantities, "__path__", [*quantities.__path__, str(folder)])
+    quantities._registry.cache_clear()
+    yield
+    quantities._registry.cache_clear()
+
+
+def test_a_new_quantity_is_one_module(depth_quantity, tmp_path):
+    from tests.conftest import run_main
+
+    data = yaml.safe_load((ROOT / "problems" / "housing_disc.yaml").read_text())
+    data["constraints"] = {"min_transmission_angle_deg": 40, "min_pin_radius": 125,
+                           "depth": {"upper": 300}}
+    path = tmp_path / "depth.yaml"
+    path.write_text(yaml.safe_dump(data))
+    code, out = run_main(["analyze", path, "--json"])
+    import json
+    first = json.loads(out)
+    assert code == 0 and first["units"]["depth"] == "mm"
+    assert first["quantities"]["values"]["depth"] > 0
+    # a bound on it: held exactly at the optimum, named in the result and its units
+    out_dir = tmp_path / "solved"
+    code, _ = run_main(["solve", path, "--out", out_dir, "--no-plots"])
+    result = json.loads((out_dir / "result.json").read_text())
+    assert code == 0 and result["status"] == "optimal"
+    depth = result["quantities"]["values"]["depth"]
+    assert depth == pytest.approx(300, rel=1e-7) and depth <= 300 * (1 + 1e-7)
+    assert any(a["name"] == "depth" for a in result["active"])
+    problem = load_problem(path)
+    assert verify(problem, result["design"]).feasible
+    # an objective over it, and a column of the front's table
+    data["objective"] = {"minimize": "depth", "min_ratio": 0.344}
+    data["constraints"] = {"min_transmission_angle_deg": 40, "min_pin_radius": 125}
+    path.write_text(yaml.safe_dump(data))
+    least = solve(load_problem(path))
+    assert least.status == "optimal" and least.quantities["values"]["depth"] < depth
+    from optdesign.pareto.front import quantity_columns
+    assert "depth" in quantity_columns()

@@ -170,6 +170,10 @@ def sweep(problem, out_dir, points: int | None = None, workers: int | None = Non
     if not problem.free_lengths():
         raise ProblemError(f"{problem.name}: design: a front needs a free length (give one a "
                            f"range, e.g. l3: {{lower: 30, upper: 90}}); every length is fixed")
+    if problem.objective.minimize not in ("ripple", "-ratio"):
+        raise ProblemError(f"{problem.source}: objective.minimize: a front is of the ripple "
+                           f"against the ratio; give minimize: ripple (got "
+                           f"{problem.objective.minimize})")
     run = _Sweep(problem, out_dir, points, workers, resume, scheduler, progress)
     return run.run()
 

@@ -9,7 +9,18 @@ from __future__ import annotations
 from .base import Quantity
 
 
-class Ratio(Quantity):
+class StrokeFigure(Quantity):
+    """A figure of the problem's stroke (:class:`~optdesign.envelope.StrokeFigures`) at one
+    eccentricity of the evaluation."""
+
+    def read(self, figures, ripple: str) -> float:
+        raise NotImplementedError
+
+    def exact(self, evaluation, eccentricity, ripple="midrange"):
+        return self.read(evaluation.at(eccentricity).figures[evaluation.stroke], ripple)
+
+
+class Ratio(StrokeFigure):
     name = "ratio"
     unit = "-"
     label = "ratio ω_out/ω1"
@@ -18,30 +29,30 @@ class Ratio(Quantity):
     worst = "min"
     at = 1.0
 
-    def exact(self, evaluation, eccentricity, ripple="midrange"):
-        return evaluation.at(eccentricity).figures[evaluation.stroke].ratio
+    def read(self, figures, ripple):
+        return figures.ratio
 
 
-class Ripple(Quantity):
+class Ripple(StrokeFigure):
     name = "ripple"
     unit = "-"
     label = "ripple δ"
     meaning = "speed ripple δ of the output (objective.ripple: midrange or mean)"
     worst = "max"
 
-    def exact(self, evaluation, eccentricity, ripple="midrange"):
-        return evaluation.at(eccentricity).figures[evaluation.stroke].ripple(ripple)
+    def read(self, figures, ripple):
+        return figures.ripple(ripple)
 
 
-class PeakSpeed(Quantity):
+class PeakSpeed(StrokeFigure):
     name = "peak_speed"
     unit = "rad/s"
     label = "peak output speed ω_max (rad/s)"
     meaning = "largest output speed over the turn"
     worst = "max"
 
-    def exact(self, evaluation, eccentricity, ripple="midrange"):
-        return evaluation.at(eccentricity).figures[evaluation.stroke].omega_max
+    def read(self, figures, ripple):
+        return figures.omega_max
 
 
 class TransmissionAngle(Quantity):

@@ -18,7 +18,7 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from ..criteria import objective_of
+from ..criteria import objective_of, quantity_specs
 from ..mechanisms import STROKE_SIGNS
 from ..quantities import design_quantities
 from ..sensitivity import sensitivity_record
@@ -195,6 +195,8 @@ class PhaseSolver:
             if "transmission_angle" in ver.violations:
                 tightening += ver.violations["transmission_angle"] + ANGLE_SAFETY_DEG
                 continue
+            if any(spec.key in ver.violations for spec in quantity_specs(problem)):
+                continue        # another extreme than the tracked one became the largest
             if not _same_cycles(ver.sequences, given) or run.at_window:
                 continue        # hand-overs changed order, or an angle ran to its window
             if robust:
@@ -232,7 +234,7 @@ class PhaseSolver:
         guess = start_guess(nlp, ver)
         lbx, ubx = nlp.bounds(guess, ver.sequences, ver.held)
         params = nlp.parameters(ver.sequences, ver.held)
-        lbg, ubg = nlp.constraint_bounds(problem, ver.sequences, tightening, ver.held)
+        lbg, ubg = nlp.constraint_bounds(problem, ver.sequences, tightening, ver.held, guess)
         with self.timings.stage("build"):
             solver = nlp.solver(hessian)
         nlp.watch.start([np.array([v[k] for k in nlp.free]) / nlp.scale for v in self.avoid],
@@ -557,7 +559,7 @@ def solve(problem, progress=None) -> SolveResult:
     if is_robust(problem):      # a robust solve ranks by the tolerance box's worst δ
         best = min(ok, key=lambda p: p.worst_case_delta, default=None)
     else:
-        best = min(ok, key=lambda p: objective.rank(p.delta, p.ratio), default=None)
+        best = min(ok, key=objective.result_key, default=None)
     if best:
         status, message = "optimal", ""
     else:

@@ -42,9 +42,10 @@ from dataclasses import dataclass, field, replace
 import casadi as ca
 import numpy as np
 
-from ..criteria import constraints_of, objective_of
+from ..criteria import constraints_of, objective_of, quantity_specs
 from ..evaluation import eccentricities_of
 from ..mechanisms import STROKE_SIGNS
+from ..quantities import TurnQuantity, get_quantity
 
 IPOPT_OPTIONS = {
     "ipopt.print_level": 0,
@@ -101,6 +102,9 @@ class Quantities:
     worst_ripple: ca.MX             # epigraph variable t >= δ_e for every listed e
     peak_speed: ca.MX               # ω_max at e = 1, rad/s
     cos_mu_sq: dict                 # eccentricity tag -> cos²μ of every chain at its extremes
+    #: a bound's or the objective's quantity by its key (criteria.quantity_specs): the
+    #: epigraph of its tracked extremes, or the envelope's own expression
+    quantities: dict = field(default_factory=dict)
 
 
 #: parameterised eccentricity slots of a problem with a regulation interval: the worst interior
@@ -316,6 +320,12 @@ class PhaseNLP:
         self.has_mu = model.has_transmission_angle(count, tuple(sorted(problem.options.items())))
         self.criteria = constraints_of(problem)
         self.objective = objective_of(problem)
+        #: bounds and the objective on quantities; the turn quantities among them are
+        #: tracked at exact stationary points in every listed eccentricity's block
+        self.specs = quantity_specs(problem)
+        self.turn = sorted({s.name for s in self.specs
+                            if isinstance(get_quantity(s.name), TurnQuantity)})
+        self._quantity_rows: dict = {}
         self.layout = Layout()
         self._solvers: dict[str, ca.Function] = {}
         self.watch: _Watch | None = None
@@ -397,7 +407,8 @@ class PhaseNLP:
         if self.n_slots:            # the held interior eccentricities (free rows when idle)
             b.row("ripple_epigraph_slots", ca.vertcat(*[t - r for r in ripples[len(self.eccs):]]))
         q = Quantities(lengths=lengths, ratio=means[0], worst_ripple=t,
-                       peak_speed=peaks[0] * P.input_speed, cos_mu_sq=cos_sq)
+                       peak_speed=peaks[0] * P.input_speed, cos_mu_sq=cos_sq,
+                       quantities=self._quantities(b, t, ripples, means))
         self._criterion_blocks = []
         for criterion in self.criteria:
             for name, expr in criterion.rows(q):
@@ -429,6 +440,45 @@ class PhaseNLP:
         self.surrogate = ca.Function("surrogate", [self.x_sym, self.p_sym],
                                      [ca.vertcat(*ripples), ca.vertcat(*means),
                                       ca.vertcat(*peaks)])
+
+    def _quantities(self, b: "_Builder", t, ripples, means) -> dict:
+        """Each quantity spec's value: the envelope's own expression for the ratio and the
+        ripple, else an epigraph variable z over the spec's eccentricity blocks with rows
+        z - c >= 0 for every figure c of a quantity whose larger values are worse (c - z
+        >= 0 for the others): a bound on z, or z as the objective, holds every figure."""
+        out = {}
+        for spec in self.specs:
+            tags = [tag_of(spec.at)] if spec.at is not None else \
+                [self.tags[i] for i in self.listed]
+            if spec.name == "ratio":
+                out[spec.key] = means[0]
+            elif spec.name == "ripple":
+                out[spec.key] = t if spec.at is None else ripples[self.tags.index(tags[0])]
+            else:
+                z = b.variable(f"quantity_{spec.key}", 1)
+                figures = ca.vertcat(*[self._quantity_rows[(spec.name, tag)] for tag in tags])
+                sign = 1 if get_quantity(spec.name).worst == "max" else -1
+                b.row(f"quantity_epigraph_{spec.key}", sign * (z - figures))
+                out[spec.key] = z
+        return out
+
+    def _tracked_quantities(self, b: "_Builder", tag: str, e, pvec, w_hi) -> None:
+        """The block's figures of every quantity a spec names: a turn quantity's components
+        at exact stationary points (a free angle per component with g_i'(φ_i) = 0, windowed
+        like the peaks), the peak speed from the block's w_hi."""
+        if tag not in [self.tags[i] for i in self.listed]:
+            return
+        options = tuple(sorted(self.problem.options.items()))
+        for name in self.turn:
+            quantity = get_quantity(name)
+            tracked = quantity.tracked(self.model, self.count, options)
+            phi_q = b.variable(f"phi_q_{name}_{tag}", tracked.size1_in(0))
+            values, slopes = tracked(phi_q, pvec)
+            b.row(f"q_stationary_{name}[{tag}]", slopes)
+            self._quantity_rows[(name, tag)] = quantity.components(values,
+                                                                   self.problem.input_speed)
+        if any(s.name == "peak_speed" for s in self.specs):
+            self._quantity_rows[("peak_speed", tag)] = w_hi * e * self.problem.input_speed
 
     def _eccentricity(self, b: "_Builder", tag: str, e, pvec, functions):
         """The variables and rows of one eccentricity block ``tag``: (δ_e, mean_e, w_hi, cos²μ
@@ -462,6 +512,7 @@ class PhaseNLP:
         if self.has_mu:
             b.row(f"mu_stationary[{tag}]", dcos_x)
             cos_sq = ca.vertcat(cos_sq, cos_x ** 2)
+        self._tracked_quantities(b, tag, e, pvec, w_hi)
         # Exact troughs at the hand-overs, and the exact mean over the runs.
         phi_x = b.variable(f"phi_handover_{tag}", M)
         before = b.parameter(f"before_{tag}", C + 1, M)
@@ -547,16 +598,23 @@ class PhaseNLP:
         return p
 
     def constraint_bounds(self, problem, sequences, tightening_deg: float = 0.0,
-                          held: Held | None = None):
+                          held: Held | None = None, guess: dict | None = None):
         """lbg, ubg of one solve: the criteria's bounds (for ``problem``'s ε and caps), the
         envelope rows, idle hand-over slots switched off, and every row of an idle
-        eccentricity slot free."""
+        eccentricity slot free; a tracked component that ``guess`` finds constant over the
+        turn has no stationary point to hold (its row free)."""
         L = self.layout
         lbg, ubg = np.zeros(self.n_g), np.full(self.n_g, np.inf)
         for tag, seq in zip(self.tags, sequences):
             for block in ("peak_stationary", "mu_stationary", "run_sums"):
                 if self.has_mu or block != "mu_stationary":
                     lbg[L.find(L.g, f"{block}[{tag}]")] = ubg[L.find(L.g, f"{block}[{tag}]")] = 0.0
+            for name in self.turn:
+                if (name, tag) in self._quantity_rows:
+                    rows = L.find(L.g, f"q_stationary_{name}[{tag}]")
+                    constant = np.asarray((guess or {}).get(f"constant_{name}_{tag}", False))
+                    lbg[rows] = np.where(constant, -np.inf, 0.0)
+                    ubg[rows] = np.where(constant, np.inf, 0.0)
             rows = L.find(L.g, f"trough_handovers[{tag}]")
             idle = np.ones(self.slots, bool)
             idle[:len(seq)] = False
@@ -602,6 +660,13 @@ class PhaseNLP:
             active = np.arange(self.slots) < len(seq)
             lbx[sl] = np.where(active, centre - half_window, centre)
             ubx[sl] = np.where(active, centre + half_window, centre)
+            for name in self.turn:
+                if (name, tag) in self._quantity_rows:
+                    sl = L.find(L.x, f"phi_q_{name}_{tag}")
+                    centre = np.asarray(guess[f"phi_q_{name}_{tag}"], dtype=float)
+                    constant = np.asarray(guess.get(f"constant_{name}_{tag}", False))
+                    lbx[sl] = np.where(constant, centre, centre - half_window)
+                    ubx[sl] = np.where(constant, centre, centre + half_window)
             lbx[L.find(L.x, f"w_{tag}")] = 0.0
             # each increment is a wrapped angle, |Δθ| <= π, so the i-th running sum lies in
             # ±(i + 1)π: bounds that are never active at a solution but keep a linear
@@ -622,7 +687,7 @@ class PhaseNLP:
         """True when a tracked angle (peak or hand-over) ended on the edge of its window: the
         point moved further than the window allows, so the driver re-centres and re-solves."""
         for block in self.layout.x:
-            if block.name.startswith(("phi_peak", "phi_handover", "phi_mu")):
+            if block.name.startswith(("phi_peak", "phi_handover", "phi_mu", "phi_q_")):
                 sl = block.slice
                 free = ubx[sl] > lbx[sl]
                 if np.any(free & ((x[sl] - lbx[sl] < tol) | (ubx[sl] - x[sl] < tol))):

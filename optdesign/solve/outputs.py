@@ -1,6 +1,8 @@
 """The plain-text account of a solve (the files themselves: :func:`optdesign.outputs.write_solve`)."""
 from __future__ import annotations
 
+from ..criteria import objective_of, quantity_specs
+from ..quantities import get_quantity
 
 
 def summary_text(result, problem) -> str:
@@ -22,6 +24,13 @@ def summary_text(result, problem) -> str:
                      f"{result.delta:.6f}; ratio = {result.ratio:.6f} (output/input speed; "
                      f"gear ratio i = 1/ratio = {gear_ratio_text(result.ratio)}); least "
                      f"transmission angle = {result.min_transmission_angle_deg:.2f} deg")
+        values = (result.quantities or {}).get("values", {})
+        named = [spec for spec in quantity_specs(problem) if spec.key in values]
+        if named:
+            lines.append("quantities: " + "; ".join(
+                f"{spec.key} = {values[spec.key]:.6g}"
+                f"{'' if get_quantity(spec.name).unit == '-' else ' ' + get_quantity(spec.name).unit}"
+                for spec in named) + " (worst over the listed eccentricities)")
         if result.worst_case_delta is not None:
             lines.append(f"robust: the worst part of the tolerance box has δ = "
                          f"{result.worst_case_delta:.6f} (the objective); every part "
@@ -48,7 +57,7 @@ def binding_text(active: list[dict], problem) -> str:
     """One line: what binds at the optimum and what relaxing it by one unit buys."""
     if not active:
         return "binding: nothing (an interior optimum: no bound or constraint is active)"
-    what = "δ" if problem.objective.minimize == "ripple" else "(-ratio)"
+    what = objective_of(problem).symbol
     return "binding: " + "; ".join(
         f"{a['name']} (d{what}/d bound = {a['sensitivity']:+.3g}"
         f"{'' if a['unit'] == '-' else ' per ' + a['unit']})" for a in active)
@@ -78,6 +87,6 @@ def bound_warnings(result, problem) -> list[str]:
         spec = problem.design[key]
         value = spec.lower if a["side"] == "lower" else spec.upper
         out.append(f"warning: {key} rests on its {a['side']} bound, {value:g} mm: the "
-                   f"optimum would go past it (dδ/d bound = {a['sensitivity']:+.3g} per mm); "
-                   f"check that the bound is a real limit")
+                   f"optimum would go past it (d{objective_of(problem).symbol}/d bound = "
+                   f"{a['sensitivity']:+.3g} per mm); check that the bound is a real limit")
     return out

@@ -17,10 +17,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.stats import qmc
 
-from ..criteria import SectionConstraint, TransmissionAngle, constraints_of, objective_of
+from ..criteria import (SectionConstraint, TransmissionAngle, constraints_of, objective_of,
+                        quantity_specs)
 from ..envelope import driving_speeds
 from ..evaluation import eccentricities_of
 from ..mechanisms import STROKE_SIGNS
+from ..quantities import get_quantity
+from ..quantities.extremes import lanes_of
 
 #: crank samples per turn of the screening grid: enough to rank designs (sampled δ is within
 #: a few per cent of the exact δ), not to certify them; IPOPT and the exact check do that
@@ -111,7 +114,7 @@ def _evaluate(problem, count, base, free, X, sampled: dict | None = None
                                               ANGLE_SLACK_DEG, 0.0))),
                     math.sqrt(1.0 - c.assembly_margin))
     violation = np.full(S, -np.inf)
-    ripples, ratio = [], None
+    ripples, ratio, peaks = [], None, {}
     with np.errstate(all="ignore"):
         for e in eccentricities_of(problem):
             P = np.vstack([lengths[k] * (e if k == model.regulating_variable else 1.0)
@@ -125,13 +128,15 @@ def _evaluate(problem, count, base, free, X, sampled: dict | None = None
             avg = 0.5 * (hi + lo) if problem.objective.ripple == "midrange" else mean
             if e in problem.eccentricities:
                 ripples.append((hi - lo) / avg)
+                peaks[e] = hi * e * problem.input_speed
             if e == 1.0:
                 ratio, peak = mean, hi
             worst_cos = np.abs(cos_mu).reshape(n, S, N).max(axis=(0, 2))
             bad = ~np.isfinite(worst_cos) | ~np.all(np.isfinite(f), axis=(0, 2)) | \
                 (worst_cos > 1.0)
             violation = np.maximum(violation, np.where(bad, np.inf, worst_cos - cos_limit))
-        q = _Sampled(lengths, ratio, np.max(ripples, axis=0), peak * problem.input_speed)
+        q = _Sampled(lengths, ratio, np.max(ripples, axis=0), peak * problem.input_speed,
+                     sampled_quantities(problem, count, lengths, ripples, peaks, ratio))
         for criterion in constraints_of(problem):
             if isinstance(criterion, (TransmissionAngle, SectionConstraint)):
                 continue        # the angle is filtered above, with slack; sections at the check
@@ -139,7 +144,7 @@ def _evaluate(problem, count, base, free, X, sampled: dict | None = None
             v = np.asarray(criterion.value(q), dtype=float)
             scale = max([1.0] + [abs(b) for b in (lower, upper) if math.isfinite(b)])
             violation = np.maximum(violation, np.maximum(lower - v, v - upper) / scale)
-        score = objective_of(problem).rank(q.worst_ripple, q.ratio)
+        score = objective_of(problem).key(q)
         if sampled is not None:
             sampled.update(delta=np.asarray(q.worst_ripple, float),
                            ratio=np.asarray(q.ratio, float))
@@ -182,6 +187,50 @@ class _Sampled:
     ratio: np.ndarray
     worst_ripple: np.ndarray
     peak_speed: np.ndarray
+    quantities: dict = field(default_factory=dict)
+
+
+def sampled_quantities(problem, count: int, lengths: dict, ripples: list, peaks: dict,
+                       ratio: np.ndarray) -> dict:
+    """Each quantity spec's sampled value per screened design: a turn quantity's maxima on
+    the screening's grid (:meth:`~optdesign.quantities.base.TurnQuantity.sampled`), the
+    envelope's sampled peak, ripple and ratio; the worst over the spec's eccentricities."""
+    model = problem.model
+    listed = list(problem.eccentricities)
+    options = tuple(sorted(problem.options.items()))
+    out = {}
+    for spec in quantity_specs(problem):
+        quantity = get_quantity(spec.name)
+        eccs = [spec.at] if spec.at is not None else listed
+        if spec.name == "ratio":
+            values = [ratio]
+        elif spec.name == "ripple":
+            values = [ripples[listed.index(e)] for e in eccs]
+        elif spec.name == "peak_speed":
+            values = [peaks[e] for e in eccs]
+        else:
+            g, _ = quantity.function(model, count, options)
+            S = len(next(iter(lengths.values())))
+            N = max(SCREEN_SAMPLES, SAMPLES_PER_CURVE * count)
+            phi = np.tile(np.linspace(0.0, 2 * np.pi, N, endpoint=False), S)[None, :]
+            values = []
+            for e in eccs:
+                P = np.vstack([lengths[k] * (e if k == model.regulating_variable else 1.0)
+                               for k in model.lengths])
+                grid = _sample_lanes(g, phi, np.repeat(P, N, axis=1))
+                values.append(quantity.sampled(grid.reshape(grid.shape[0], S, N),
+                                               problem.input_speed))
+        out[spec.key] = np.max(values, axis=0) if quantity.worst == "max" else \
+            np.min(values, axis=0)
+    return out
+
+
+def _sample_lanes(function, phi, P) -> np.ndarray:
+    """``function`` at many (φ, p) columns: NumPy lanes, or CasADi's ``map``."""
+    lanes = lanes_of(function)
+    if lanes is not None:
+        return lanes(phi, P)[0]
+    return np.array(function.map(P.shape[1])(phi, P))
 
 
 def _basins(candidates: list[Candidate], d: int) -> tuple[list[Candidate], float]:

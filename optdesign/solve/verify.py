@@ -16,6 +16,7 @@ from ..criteria import (TOL_ANGLE_DEG, TOL_LENGTH_REL, TOL_RATIO, Measured,
                         SectionConstraint, constraints_of, objective_of)
 from ..errors import AssemblyError
 from ..evaluation import Evaluation, eccentricities_of, evaluate_problem
+from ..quantities import get_quantity
 from .nlp import Held
 
 #: the tolerances and the eccentricity order are the criteria's and the evaluation's; they are
@@ -144,4 +145,11 @@ def start_guess(nlp, ver: Verification) -> dict:
         handovers = x.handovers
         pad = np.full(nlp.slots - handovers.size, handovers[0] if handovers.size else 0.0)
         guess[f"phi_handover_{tag}"] = np.concatenate([handovers, pad])
+        for name in nlp.turn:
+            maxima = get_quantity(name).maxima(ev.design, e)
+            guess[f"phi_q_{name}_{tag}"] = maxima.angles
+            guess[f"constant_{name}_{tag}"] = maxima.constant
+    for spec in nlp.specs:
+        if spec.name not in ("ratio", "ripple"):
+            guess[f"quantity_{spec.key}"] = [ver.measured.quantities[spec.key]]
     return guess

@@ -115,4 +115,4 @@ def plot_front(front, ax=None, title: str | None = None):
 
     points = front.points.copy()
     points.attrs["knee"] = front.indicators.get("knee")
-    return plot_fronts(points, ax=ax, title=title)
+    return plot_fronts(points, ax=ax, title=title, axis=front.axis)

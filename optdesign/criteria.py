@@ -202,7 +202,11 @@ class QuantityConstraint(Constraint):
         return q.quantities[self.spec.key]
 
     def bounds(self, problem, tightening_deg=0.0):
-        return self.spec.lower, self.spec.upper
+        """The bound of ``problem``'s spec of this key (a Pareto point's ε moves it without
+        rebuilding the NLP)."""
+        spec = next((s for s in problem.constraints.quantities if s.key == self.spec.key),
+                    self.spec)
+        return spec.lower, spec.upper
 
     def tolerance(self, m):
         """Relative to the value: the NLP holds the bound to IPOPT's tolerance."""

@@ -13,8 +13,10 @@ from pathlib import Path
 #: keys are added or one is deprecated (its alias kept beside the new name): a reader of the
 #: old layout keeps working. Bump the major part ("1.x" -> "2.0") when a key is removed,
 #: renamed without an alias, or changes its meaning or unit. Documents without the key are
-#: "1.0" (before 1.1 added ``schema_version``, ``units`` and ``omega_midrange``).
-SCHEMA_VERSION = "1.1"
+#: "1.0" (before 1.1 added ``schema_version``, ``units`` and ``omega_midrange``); 1.2 added
+#: ``quantities`` (optdesign.quantities) and a Pareto record's ``gain`` on a front against
+#: another quantity than the ratio.
+SCHEMA_VERSION = "1.2"
 
 
 def atomic_write_bytes(path: str | Path, data: bytes) -> Path:

@@ -70,14 +70,16 @@ def write_report(result, problem, out_dir, problem_path=None,
     images = {}
     points = result.points
     points.attrs["knee"] = result.indicators.get("knee")
+    axis = result.axis
     images["fronts.png"] = save_figure(
-        plot_fronts(points, title=f"{problem.name}: ripple against ratio"), out / "fronts.png")
+        plot_fronts(points, title=f"{problem.name}: ripple against {axis.name}", axis=axis),
+        out / "fronts.png")
     free = problem.free_lengths()
     if free:
         images["lengths.png"] = save_figure(
             plot_lengths(points, {k: (problem.design[k].lower, problem.design[k].upper)
                                   for k in free},
-                         title=f"{problem.name}: free lengths along the front"),
+                         title=f"{problem.name}: free lengths along the front", axis=axis),
             out / "lengths.png")
     knee = result.knee
     if knee is not None:

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..tabular import Tabular
+from .axis import Axis
 from .indicators import indicators, non_dominated, objectives
 
 #: leading columns of pareto.csv (docs/contract.md names the first nine); the
@@ -27,7 +28,7 @@ def quantity_columns() -> list[str]:
     return [name for name in known() if name not in ENVELOPE_QUANTITIES]
 
 
-def frame(records: list[dict], lengths: list[str]):
+def frame(records: list[dict], lengths: list[str], axis: Axis = Axis()):
     """DataFrame of the grid-point records, sorted by phase count and ε (refined points
     among the others).
 
@@ -56,14 +57,22 @@ def frame(records: list[dict], lengths: list[str]):
         df = df.sort_values(["phases", "epsilon", "index"], kind="stable").reset_index(
             drop=True)
         ok = df["status"] == "optimal"
-        f = objectives(df.loc[ok, "delta"], df.loc[ok, "ratio"])
+        f = objectives(df.loc[ok, "delta"], gain(df.loc[ok], axis))
         df.loc[ok, "non_dominated"] = non_dominated(f)
         for n, group in df[ok].groupby("phases"):
-            g = objectives(group["delta"], group["ratio"])
+            g = objectives(group["delta"], gain(group, axis))
             df.loc[group.index, "count_front"] = non_dominated(g)
+        if not axis.is_ratio:           # ε in the quantity's own units: the bound it held
+            df["epsilon"] = axis.sign * df["epsilon"]
     for col in ("count_front", "non_dominated"):
         df[col] = df[col].astype(bool)
     return df
+
+
+def gain(points, axis: Axis):
+    """The front's second objective of every row, larger is better: the ratio, or sign times
+    the quantity the front is swept against."""
+    return axis.sign * points[axis.name].astype(float)
 
 
 @dataclass
@@ -77,9 +86,15 @@ class ParetoResult(Tabular):
     ends: list[dict] = field(default_factory=list)    # the raw end-point solves
 
     @property
+    def axis(self) -> Axis:
+        """What the ripple is traded against (the ratio unless ``pareto.against`` says)."""
+        return Axis(self.run.get("against", "ratio"))
+
+    @property
     def front(self):
-        """The designs non-dominated across every phase count, by ratio."""
-        return self.points[self.points["non_dominated"]].sort_values("ratio")
+        """The designs non-dominated across every phase count, by the quantity the front is
+        swept against (the ratio)."""
+        return self.points[self.points["non_dominated"]].sort_values(self.axis.name)
 
     @property
     def knee(self):
@@ -122,7 +137,17 @@ class ParetoResult(Tabular):
                         "points": [_plain(r) for r in df.to_dict(orient="records")],
                         "ends": self.ends},
                        {"phases": "- (count)"} | {k: "- (count)" for k in counts}
-                       | {k: "mm" for k in lengths})
+                       | {k: "mm" for k in lengths} | self._axis_units())
+
+    def _axis_units(self) -> dict:
+        """On a front against another quantity than the ratio, ε is a bound on it."""
+        axis = self.axis
+        if axis.is_ratio:
+            return {}
+        return {"epsilon": f"{axis.unit} (the bound on {axis.name} of the point's solve)",
+                "gain": f"{axis.unit} ({'+' if axis.sign > 0 else '-'}{axis.name}: the "
+                        f"front's second objective, larger is better)",
+                "gain_multiplier": f"1/{axis.unit} (d delta / d gain)"}
 
 
 def _plain(row: dict) -> dict:
@@ -136,15 +161,16 @@ def _plain(row: dict) -> dict:
     return out
 
 
-def evaluate(points) -> tuple[dict, dict]:
+def evaluate(points, axis: Axis = Axis()) -> tuple[dict, dict]:
     """Indicators of the overall front (knee as a row label of ``points``) and per count."""
     ok = points[points["status"] == "optimal"]
-    overall = indicators(ok["delta"], ok["ratio"])
+    named = {"name": axis.name, "sign": axis.sign}
+    overall = indicators(ok["delta"], gain(ok, axis), **named)
     if overall["knee"] is not None:
         overall["knee"] = int(ok.index[overall["knee"]])
     per_count = {}
     for n, group in ok.groupby("phases"):
-        ind = indicators(group["delta"], group["ratio"])
+        ind = indicators(group["delta"], gain(group, axis), **named)
         if ind["knee"] is not None:
             ind["knee"] = int(group.index[ind["knee"]])
         per_count[int(n)] = ind

@@ -100,9 +100,12 @@ def knee(z: np.ndarray) -> int:
                                                                               z[:, 1])))
 
 
-def indicators(delta, ratio, ideal=None, nadir=None) -> dict:
+def indicators(delta, ratio, ideal=None, nadir=None, name: str = "ratio",
+               sign: float = 1.0) -> dict:
     """Hypervolume, spacing and knee of the non-dominated subset of (δ, ratio) points; a
-    front of one design has neither hypervolume nor spacing (None), not the ideal's value."""
+    front of one design has neither hypervolume nor spacing (None), not the ideal's value.
+    ``ratio`` may be any gain (larger better) of the quantity ``name``, gain = sign·value:
+    the ideal and the nadir then name the quantity's own values."""
     f = objectives(delta, ratio)
     mask = non_dominated(f) if len(f) else np.zeros(0, bool)
     front = f[mask]
@@ -116,5 +119,5 @@ def indicators(delta, ratio, ideal=None, nadir=None) -> dict:
             "spacing": None if single else spacing(z),
             "knee": int(np.flatnonzero(mask)[k]),
             "reference_point_normalised": list(REFERENCE),
-            "ideal": {"delta": float(ideal[0]), "ratio": float(-ideal[1])},
-            "nadir": {"delta": float(nadir[0]), "ratio": float(-nadir[1])}}
+            "ideal": {"delta": float(ideal[0]), name: float(-sign * ideal[1])},
+            "nadir": {"delta": float(nadir[0]), name: float(-sign * nadir[1])}}

@@ -77,8 +77,29 @@ def _index(r: dict):
     return r["key"][1]
 
 
+def gain(r: dict):
+    """The front's second objective of a record, larger is better: its ``gain`` on a front
+    against another quantity than the ratio (``pareto.against``), else its ratio."""
+    return r["gain"] if "gain" in r else r.get("ratio")
+
+
+def _less(gain: float) -> float:
+    """``gain`` less :data:`DOMINANCE_REL` of its size (a gain may be negative: a housing
+    radius counts negatively); the ratio's ``ratio·(1 − rel)``."""
+    return gain * (1 - DOMINANCE_REL) if gain >= 0 else gain * (1 + DOMINANCE_REL)
+
+
+def _more(gain: float) -> float:
+    return gain * (1 + DOMINANCE_REL) if gain >= 0 else gain * (1 - DOMINANCE_REL)
+
+
+def _slope(r: dict):
+    """d δ / d gain at a record (the ratio's multiplier on a ratio front)."""
+    return r["gain_multiplier"] if "gain_multiplier" in r else r.get("ratio_multiplier")
+
+
 def _ok(r: dict) -> bool:
-    return bool(r.get("feasible")) and r.get("delta") is not None and r.get("ratio") is not None
+    return bool(r.get("feasible")) and r.get("delta") is not None and gain(r) is not None
 
 
 # --------------------------------------------------------------------------- the rows shown
@@ -173,28 +194,28 @@ def gaps(front: list[dict], tried: list[dict], settings: Refinement) -> list[Gap
     design landed on the gap's upper end shows the front jumps there; a failed one inside a
     gap leaves that gap alone).
     """
-    pts = sorted(front, key=lambda r: (r["ratio"], r["delta"]))
+    pts = sorted(front, key=lambda r: (gain(r), r["delta"]))
     if len(pts) < 2:
         return []
-    ratio = np.array([p["ratio"] for p in pts])
+    ratio = np.array([gain(p) for p in pts])
     delta = np.array([p["delta"] for p in pts])
     r_span, d_span = float(np.ptp(ratio)), float(np.ptp(delta))
     if r_span <= 0 or d_span <= 0:
         return []
     out = []
     for a, b in zip(pts, pts[1:]):
-        dist = math.hypot((b["ratio"] - a["ratio"]) / r_span, (b["delta"] - a["delta"]) / d_span)
-        ta, tb = (_angle(p.get("ratio_multiplier"), r_span, d_span) for p in (a, b))
+        dist = math.hypot((gain(b) - gain(a)) / r_span, (b["delta"] - a["delta"]) / d_span)
+        ta, tb = (_angle(_slope(p), r_span, d_span) for p in (a, b))
         turn = abs(ta - tb) if ta is not None and tb is not None else None
         if not (dist > settings.max_gap or (turn is not None and turn > settings.max_turn_deg
                                             and dist > TURN_GAP_SHARE * settings.max_gap)):
             continue
-        lo, hi = a["ratio"], b["ratio"]
+        lo, hi = gain(a), gain(b)
         inside = [t for t in tried if t.get("epsilon") is not None and lo < t["epsilon"] < hi]
         if any(not _ok(t) for t in inside):
             continue
         for t in inside:
-            if t["ratio"] >= b["ratio"] * (1 - DOMINANCE_REL):
+            if gain(t) >= _less(gain(b)):
                 hi = min(hi, t["epsilon"])          # the front jumps between lo and t's ε
         if (hi - lo) / r_span <= SETTLED_SHARE * settings.max_gap:
             continue
@@ -229,7 +250,7 @@ def _non_dominated(rows: list[dict]) -> list[dict]:
     """The rows no other row dominates in (δ, ratio), in their order."""
     if not rows:
         return []
-    mask = non_dominated(objectives([r["delta"] for r in rows], [r["ratio"] for r in rows]))
+    mask = non_dominated(objectives([r["delta"] for r in rows], [gain(r) for r in rows]))
     return [r for r, keep in zip(rows, mask) if keep]
 
 
@@ -239,11 +260,11 @@ def dominated(front: list[dict]) -> list[tuple[dict, dict]]:
     out = []
     for p in front:
         doms = [q for q in front if q is not p and
-                ((q["delta"] < p["delta"] * (1 - DOMINANCE_REL) and q["ratio"] >= p["ratio"])
-                 or (q["ratio"] > p["ratio"] * (1 + DOMINANCE_REL) and
+                ((q["delta"] < p["delta"] * (1 - DOMINANCE_REL) and gain(q) >= gain(p))
+                 or (gain(q) > _more(gain(p)) and
                      q["delta"] <= p["delta"]))]
         if doms:
-            out.append((p, min(doms, key=lambda q: (q["delta"], -q["ratio"]))))
+            out.append((p, min(doms, key=lambda q: (q["delta"], -gain(q)))))
     return out
 
 
@@ -295,7 +316,7 @@ def _front_of_every_count(records: list[dict], lengths: list[str]) -> list[dict]
     shows them), by ratio."""
     return sorted(_non_dominated([r for r in visible(records, lengths)
                                   if not isinstance(_index(r), str) and _ok(r)]),
-                  key=lambda r: (r["ratio"], r["delta"]))
+                  key=lambda r: (gain(r), r["delta"]))
 
 
 def plan_hypervolume(records: list[dict], lengths: list[str], settings: Refinement,
@@ -324,24 +345,24 @@ def plan_hypervolume(records: list[dict], lengths: list[str], settings: Refineme
     front = _front_of_every_count(records, lengths)
     if budget <= 0 or len(front) < 2:
         return []
-    r_span = front[-1]["ratio"] - front[0]["ratio"]
+    r_span = gain(front[-1]) - gain(front[0])
     d_span = max(r["delta"] for r in front) - min(r["delta"] for r in front)
     if r_span <= 0 or d_span <= 0:
         return []
     candidates = []                  # (area, [(count, lo, hi, start, also)])
     for a, b in zip(front, front[1:]):
-        dx, dy = (b["ratio"] - a["ratio"]) / r_span, abs(b["delta"] - a["delta"]) / d_span
+        dx, dy = (gain(b) - gain(a)) / r_span, abs(b["delta"] - a["delta"]) / d_span
         if dx * dy <= settings.hypervolume_gap:
             continue
         counts = [b["phases"]] + ([a["phases"]] if a["phases"] != b["phases"] else [])
-        ta, tb = (_angle(p.get("ratio_multiplier"), r_span, d_span) for p in (a, b))
+        ta, tb = (_angle(_slope(p), r_span, d_span) for p in (a, b))
         turns = ta is None or tb is None or abs(ta - tb) > settings.max_turn_deg
         jobs = []
         for n in counts:
-            lo, hi = a["ratio"], b["ratio"]
+            lo, hi = gain(a), gain(b)
             inside = [t for t in records if t.get("phases") == n and
                       t.get("epsilon") is not None and lo < t["epsilon"] < hi]
-            if any(not _ok(t) or t["ratio"] < b["ratio"] * (1 - DOMINANCE_REL)
+            if any(not _ok(t) or gain(t) < _less(gain(b))
                    for t in inside):
                 continue
             for t in inside:

@@ -14,48 +14,59 @@ from pathlib import Path
 
 import numpy as np
 
+from .axis import Axis
 from .indicators import REFERENCE
 from .refine import MAX_ROUNDS
 
 MARKERS = "osD^v<>p*h"
 
 
-def plot_fronts(points, ax=None, title: str | None = None):
-    """δ against ratio: each phase count's own front (line), the points it dominates (faint),
-    the overall non-dominated designs (ringed) and the knee (star)."""
+def plot_fronts(points, ax=None, title: str | None = None, axis: Axis = Axis()):
+    """δ against ratio (or the quantity ``axis`` names): each phase count's own front (line),
+    the points it dominates (faint), the overall non-dominated designs (ringed) and the knee
+    (star)."""
     from ..plots import pyplot
     plt = pyplot()
+    x = axis.name
     fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(figsize=(7.5, 5))
     ok = points[points["status"] == "optimal"]
     for j, (n, g) in enumerate(ok.groupby("phases")):
-        front = g[g["count_front"]].sort_values("ratio")
-        line, = ax.plot(front["ratio"], front["delta"], marker=MARKERS[j % len(MARKERS)],
+        front = g[g["count_front"]].sort_values(x)
+        line, = ax.plot(front[x], front["delta"], marker=MARKERS[j % len(MARKERS)],
                         ms=5, lw=1.4, label=f"n = {n} ({len(front)} points)")
         rest = g[~g["count_front"]]
         if len(rest):
-            ax.plot(rest["ratio"], rest["delta"], MARKERS[j % len(MARKERS)], ms=4, alpha=0.3,
+            ax.plot(rest[x], rest["delta"], MARKERS[j % len(MARKERS)], ms=4, alpha=0.3,
                     color=line.get_color())
     if "round" in ok:
         refined = ok[ok["round"].fillna(0) >= 1]
         if len(refined):
-            ax.plot(refined["ratio"], refined["delta"], "+", ms=6, color="black", mew=0.8,
+            ax.plot(refined[x], refined["delta"], "+", ms=6, color="black", mew=0.8,
                     label="refined ε (after the uniform pass)")
     nd = ok[ok["non_dominated"]]
-    ax.plot(nd["ratio"], nd["delta"], "o", ms=10, mfc="none", mec="black", mew=1.0,
+    ax.plot(nd[x], nd["delta"], "o", ms=10, mfc="none", mec="black", mew=1.0,
             label="non-dominated over every n")
     if "knee" in points.attrs and points.attrs["knee"] is not None:
         k = points.loc[points.attrs["knee"]]
-        ax.plot(k["ratio"], k["delta"], "*", ms=16, color="crimson", mec="black",
+        ax.plot(k[x], k["delta"], "*", ms=16, color="crimson", mec="black",
                 label=f"knee (n = {int(k['phases'])})")
-    ax.set_xlabel("ratio = mean output speed / ω1 (at e = 1; gear ratio i = 1/ratio)")
+    ax.set_xlabel(axis_label(axis))
     ax.set_ylabel("ripple δ (exact)")
-    ax.set_title(title or "ripple against ratio, per phase count")
+    ax.set_title(title or f"ripple against {axis.name}, per phase count")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     return fig
 
 
-def plot_lengths(points, bounds: dict, axes=None, title: str | None = None):
+def axis_label(axis: Axis) -> str:
+    """The x label of a front's figures."""
+    if axis.is_ratio:
+        return "ratio = mean output speed / ω1 (at e = 1; gear ratio i = 1/ratio)"
+    return f"{axis.name}: {axis.label} (worst over the listed eccentricities)"
+
+
+def plot_lengths(points, bounds: dict, axes=None, title: str | None = None,
+                 axis: Axis = Axis()):
     """Each free length of every phase count's front against the ratio, one panel per
     length, with the length's lower and upper bounds as dashed lines (a front running along
     one is held by that bound). ``bounds``: {length: (lower, upper)} in mm."""
@@ -77,12 +88,12 @@ def plot_lengths(points, bounds: dict, axes=None, title: str | None = None):
     knee = points.attrs.get("knee")
     for ax, name in zip(axes, names):
         for j, (n, g) in enumerate(ok.groupby("phases")):
-            front = g[g["count_front"]].sort_values("ratio")
-            ax.plot(front["ratio"], front[name], marker=MARKERS[j % len(MARKERS)], ms=4.5,
+            front = g[g["count_front"]].sort_values(axis.name)
+            ax.plot(front[axis.name], front[name], marker=MARKERS[j % len(MARKERS)], ms=4.5,
                     lw=1.3, label=f"n = {n}")
         if knee is not None:
             k = points.loc[knee]
-            ax.plot(k["ratio"], k[name], "*", ms=13, color="crimson", mec="black", zorder=5,
+            ax.plot(k[axis.name], k[name], "*", ms=13, color="crimson", mec="black", zorder=5,
                     label="knee")
         lower, upper = bounds[name]
         for value, side in ((lower, "lower"), (upper, "upper")):
@@ -95,7 +106,8 @@ def plot_lengths(points, bounds: dict, axes=None, title: str | None = None):
         ax.set_ylim(lower - pad, upper + pad)
         ax.set_title(name, fontsize=10)
         ax.set_ylabel(f"{name} [mm]")
-        ax.set_xlabel("ratio = output / input speed (at e = 1)")
+        ax.set_xlabel("ratio = output / input speed (at e = 1)" if axis.is_ratio
+                      else f"{axis.name} [{axis.unit}]")
         ax.tick_params(axis="x", labelbottom=True)
         ax.xaxis.set_major_locator(MaxNLocator(5))
         ax.grid(alpha=0.3)
@@ -137,10 +149,14 @@ def _fmt(v, digits=4):
 def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
     lengths = list(problem.model.lengths)
     ind = result.indicators
+    axis = result.axis
+    x = axis.name
+    side = "≥" if axis.sign > 0 else "≤"
     out = [("h1", f"Pareto front: {problem.name}"),
            ("p", f"{problem.mechanism}, {problem.stroke} stroke, ω1 = {problem.input_speed:g} "
-                 f"rad/s. Least ripple δ ({problem.objective.ripple}) subject to ratio ≥ ε, "
-                 f"ε swept across each phase count's reachable ratio range; every point "
+                 f"rad/s. Least ripple δ ({problem.objective.ripple}) subject to {x} {side} ε"
+                 + ("" if axis.is_ratio else f" ({axis.label})") +
+                 f", ε swept across each phase count's reachable {x} range; every point "
                  f"re-evaluated by the exact evaluator.")]
     out.append(("h2", "Fronts"))
     out.append(("img", "fronts.png", images.get("fronts.png")))
@@ -159,35 +175,37 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
                            f"design already listed are merged into its row."))
     if images.get("lengths.png") is not None:
         out.append(("h2", "Lengths along the front"))
-        out.append(("p", "Each free length of every phase count's front against the ratio it "
+        out.append(("p", f"Each free length of every phase count's front against the {x} it "
                          "reaches, between its bounds from the problem file (dashed): a front "
                          "that runs along a bound is held there by it."))
         out.append(("img", "lengths.png", images["lengths.png"]))
     out.append(("h2", "Indicators"))
-    out.append(("p", "Objectives δ (minimised) and ratio (maximised), normalised so the ideal "
+    out.append(("p", f"Objectives δ (minimised) and {x} ({'max' if axis.sign > 0 else 'min'}"
+                     "imised), normalised so the ideal "
                      "point is (0, 0) and the nadir (1, 1) of the front judged; hypervolume "
                      f"to the reference point {REFERENCE} in that space (at most "
                      f"{REFERENCE[0] * REFERENCE[1]:.2f}); spacing is Schott's (0 for evenly "
                      "spaced points); the knee is the point farthest from the chord between "
                      "the front's two ends, towards the ideal."))
     rows = [["every n", ind["n_points"], _fmt(ind["hypervolume"]), _fmt(ind["spacing"]),
-             _nadir(ind)]]
+             _nadir(ind, x)]]
     for n, v in result.per_count.items():
         rows.append([f"n = {n}", v["n_points"], _fmt(v["hypervolume"]), _fmt(v["spacing"]),
-                     _nadir(v)])
+                     _nadir(v, x)])
     out.append(("table", ["front", "non-dominated points", "hypervolume", "spacing",
-                          "ideal / nadir (δ, ratio)"], rows))
+                          f"ideal / nadir (δ, {x})"], rows))
     if ind["n_points"] == 1:
-        out.append(("p", "One design only: no trade-off between δ and the ratio in these "
+        out.append(("p", f"One design only: no trade-off between δ and the {x} in these "
                          "bounds, and no hypervolume to report."))
-    limits = [(e["phases"], e["ratio"], e.get("ratio_limited_by", "")) for e in result.ends
-              if e.get("kind") == "largest_ratio" and e.get("status") == "optimal"]
+    best = "largest" if axis.sign > 0 else "least"
+    limits = [(e["phases"], axis.value_of(e), e.get("ratio_limited_by", ""))
+              for e in result.ends if e.get("kind") == axis.end and e.get("status") == "optimal"]
     if limits:
-        out.append(("h2", "What limits the ratio"))
-        out.append(("p", "At each phase count's largest-ratio end, the constraints and bounds "
+        out.append(("h2", f"What limits the {x}"))
+        out.append(("p", f"At each phase count's {best}-{x} end, the constraints and bounds "
                          "that bind (IPOPT's active set): relaxing one of them is what would "
-                         "reach a larger ratio."))
-        out.append(("table", ["n", "largest ratio", "limited by"],
+                         f"reach a {'larger' if axis.sign > 0 else 'smaller'} {x}."))
+        out.append(("table", ["n", f"{best} {x}", "limited by"],
                     [[n, _fmt(r, 5), by or "nothing active (an interior maximum)"]
                      for n, r, by in limits]))
     knee = result.knee
@@ -195,7 +213,9 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
         out.append(("h2", "The knee design (best compromise)"))
         out.append(("p", f"n = {int(knee['phases'])}: " + ", ".join(
             f"{k} = {knee[k]:.3f} mm" for k in lengths) +
-            f"; δ = {knee['delta']:.5f}, ratio = {knee['ratio']:.5f}, least transmission "
+            f"; δ = {knee['delta']:.5f}, ratio = {knee['ratio']:.5f}"
+            + ("" if axis.is_ratio else f", {x} = {knee[x]:.5g} {axis.unit}") +
+            ", least transmission "
             f"angle {knee['min_transmission_angle_deg']:.2f}°" +
             (f", pin radius {knee['pin_radius']:.2f} mm" if knee.get("pin_radius") ==
              knee.get("pin_radius") and knee.get("pin_radius") is not None else "") +
@@ -205,10 +225,11 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
         out.append(("img", "knee_mechanism.png", images.get("knee_mechanism.png")))
         out.append(("img", "knee_speeds.png", images.get("knee_speeds.png")))
     out.append(("h2", "Non-dominated designs (over every phase count)"))
-    cols = ["phases", "delta", "ratio"] + lengths + ["min_transmission_angle_deg",
-                                                       "pin_radius", "ratio_multiplier",
-                                                       "binding", "status"]
-    head = ["n", "δ", "ratio"] + [f"{k} [mm]" for k in lengths] + [
+    extra = [] if axis.is_ratio else [x]
+    cols = ["phases", "delta", "ratio"] + extra + lengths + [
+        "min_transmission_angle_deg", "pin_radius", "ratio_multiplier", "binding", "status"]
+    head = ["n", "δ", "ratio"] + [f"{x} [{axis.unit}]" for x in extra] + [
+        f"{k} [mm]" for k in lengths] + [
         "μ_min [°]", "pin radius [mm]", "dδ/d ratio", "binding", "status"]
     rows = [[_fmt(r[c], 5 if c in ("delta", "ratio") else 3) if c != "phases" else
              int(r[c]) for c in cols] for _, r in result.front.iterrows()]
@@ -223,11 +244,11 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
     return out
 
 
-def _nadir(ind) -> str:
+def _nadir(ind, x: str = "ratio") -> str:
     if not ind.get("ideal"):
         return ""
     i, n = ind["ideal"], ind["nadir"]
-    return f"({i['delta']:.4f}, {i['ratio']:.4f}) / ({n['delta']:.4f}, {n['ratio']:.4f})"
+    return f"({i['delta']:.4f}, {i[x]:.4f}) / ({n['delta']:.4f}, {n[x]:.4f})"
 
 
 def render_md(items) -> str:
@@ -290,6 +311,9 @@ def summary_text(result) -> str:
                      f"(1, 1), reference {REFERENCE}); spacing {_fmt(ind['spacing'])}")
     knee = result.knee
     if knee is not None:
+        axis = result.axis
         lines.append(f"knee: n = {int(knee['phases'])}, δ = {knee['delta']:.5f}, ratio = "
-                     f"{knee['ratio']:.5f}")
+                     f"{knee['ratio']:.5f}" + ("" if axis.is_ratio else
+                                               f", {axis.name} = {knee[axis.name]:.5g} "
+                                               f"{axis.unit}"))
     return "\n".join(lines)

@@ -4,6 +4,7 @@ Registered in ``optdesign.problem.SECTION_PARSERS``; every key is optional::
 
     pareto:
       points: 12            # ε values per phase count, end points included (default 12)
+      against: ratio        # the quantity traded against the ripple (or housing_radius ...)
       ratio_lower: 0.5      # sweep ε from here ... (default: the least-ripple design's ratio)
       ratio_upper: 0.8      # ... to here (default: the largest ratio the linkage reaches)
       counts: [4, 6]        # phase counts to sweep (default: every admissible count)
@@ -23,6 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..declarations import Key, names
+from .axis import choices as axis_choices
 from .refine import (DEFAULT_HYPERVOLUME_GAP, DEFAULT_HYPERVOLUME_POINTS, DEFAULT_MAX_GAP,
                      DEFAULT_MAX_POINTS, DEFAULT_MAX_TURN_DEG, HYPERVOLUME_ROUNDS, MAX_ROUNDS,
                      Refinement)
@@ -36,6 +38,9 @@ DECLARATION = Key(
     default_text="every default", nullable=True, keys=(
         Key("points", "integer", "ε values per phase count, both ends included (--points "
             "overrides it)", default=DEFAULT_POINTS, lower=2, upper=MAX_POINTS),
+        Key("against", "choice", "the quantity the ripple is traded against: the ratio, or a "
+            "quantity of the design such as housing_radius (docs/quantities.md)",
+            default="ratio", choices=lambda: axis_choices()),
         Key("ratio_lower", "number", "sweep ε from this ratio", unit="-", lower=0,
             open_lower=True, default_text="the least-ripple design's ratio", example=0.5),
         Key("ratio_upper", "number", "... to this ratio (must exceed ratio_lower)", unit="-",
@@ -77,6 +82,7 @@ REFINE_KEYS = names(DECLARATION.key("refine").keys)
 @dataclass(frozen=True)
 class ParetoSection:
     points: int = DEFAULT_POINTS
+    against: str = "ratio"
     ratio_lower: float | None = None
     ratio_upper: float | None = None
     counts: tuple[int, ...] | None = None
@@ -101,9 +107,14 @@ def parse_section(raw, reader) -> ParetoSection:
     raw = reader.mapping({} if raw is None else raw, "")
     reader.known_keys(raw, "", KEYS)
     kw = {"source": reader.where}
-    for key in ("points", "ratio_lower", "ratio_upper"):
+    for key in ("points", "against", "ratio_lower", "ratio_upper"):
         if key in raw:
             kw[key] = DECLARATION.key(key).read(reader, raw[key], key)
+    if kw.get("against", "ratio") != "ratio":
+        for key in ("ratio_lower", "ratio_upper"):
+            if key in kw:
+                raise reader.error(key, f"bounds the ratio's sweep; a front against "
+                                        f"{kw['against']} spans what each count reaches")
     if "ratio_lower" in kw and "ratio_upper" in kw and kw["ratio_upper"] <= kw["ratio_lower"]:
         raise reader.error("ratio_upper", f"must exceed ratio_lower (got {kw['ratio_upper']:g}"
                                           f" <= {kw['ratio_lower']:g})")

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .axis import axis_of
+
 #: a screened design passes ε when its sampled ratio is at least ε·(1 − RATIO_SLACK): the
 #: coarse grid's ratio is within a fraction of a per cent of the exact one, and a start just
 #: below ε is still a good start
@@ -23,8 +25,9 @@ RATIO_SLACK = 2e-3
 
 @dataclass
 class ScreenedCount:
-    """One phase count's screened designs: their values, sampled δ and ratio, whether they
-    pass every filter but the ratio bound, and their place in the unit box."""
+    """One phase count's screened designs: their values, sampled δ and ratio (the gain, on a
+    front against another quantity), whether they pass every filter but the ratio bound, and
+    their place in the unit box."""
 
     count: int
     values: list[dict]
@@ -49,7 +52,10 @@ class ScreenedCount:
         upper = np.array([problem.design[k].upper for k in free], float)
         n = len(s.candidates)
         delta = sampled.get("delta", np.full(n, np.inf))
-        ratio = sampled.get("ratio", np.full(n, -np.inf))
+        axis = axis_of(problem)         # the gain: the ratio, or sign·the swept quantity
+        ratio = sampled.get("ratio", np.full(n, -np.inf)) if axis.is_ratio else \
+            axis.sign * np.asarray(sampled.get("quantities", {}).get(axis.name,
+                                                                     np.full(n, np.nan)))
         ok = np.array([c.feasible for c in s.candidates], bool) & np.isfinite(delta) & \
             np.isfinite(ratio)
         values = [{k: float(v) for k, v in c.values.items()} for c in s.candidates]
@@ -68,7 +74,8 @@ class ScreenedCount:
         skipped: that start covers it."""
         if n <= 0 or not len(self.values):
             return []
-        passing = np.flatnonzero(self.feasible & (self.ratio >= epsilon * (1 - RATIO_SLACK)))
+        reach = epsilon * (1 - RATIO_SLACK) if epsilon >= 0 else epsilon * (1 + RATIO_SLACK)
+        passing = np.flatnonzero(self.feasible & (self.ratio >= reach))
         order = passing[np.argsort(self.delta[passing], kind="stable")]
         points = self.unit[order]
         covered = [self.position(v) for v in near if v]

@@ -31,21 +31,22 @@ from ..errors import OptDesignError
 from ..lifetime import die_with_parent, raise_if_terminated
 from ..outputs import write_front
 from . import refine
+from .axis import axis_of, with_axis
 from .front import ParetoResult, evaluate, frame
 from .seeds import ScreenedCount
 from .section import DEFAULT_POINTS, ParetoSection
 from .store import Journal
 
-ENDS = ("least_ripple", "largest_ratio")
 #: pareto.csv/json are rebuilt from the journal at most this often while points come in (a
 #: rebuild takes tens of ms in this process, beside the workers) and once at the end
 REBUILD_EVERY_S = 1.0
 
 
 def grid(section: ParetoSection, ends: dict, points: int) -> np.ndarray:
-    """The ε values of one phase count: ``points`` evenly over the reachable ratio range,
-    clipped to the section's ratio_lower/ratio_upper (empty when the span misses it)."""
-    lo, hi = ends["least_ripple"]["ratio"], ends["largest_ratio"]["ratio"]
+    """The ε values of one phase count: ``points`` evenly over the reachable range of the
+    gain (the ratio, or another quantity: :mod:`optdesign.pareto.axis`), clipped to the
+    section's ratio_lower/ratio_upper (empty when the span misses it)."""
+    lo, hi = (refine.gain(e) for e in ends.values())
     if hi is None or hi < lo:
         hi = lo
     a = max(lo, section.ratio_lower) if section.ratio_lower is not None else lo
@@ -171,9 +172,14 @@ def sweep(problem, out_dir, points: int | None = None, workers: int | None = Non
         raise ProblemError(f"{problem.name}: design: a front needs a free length (give one a "
                            f"range, e.g. l3: {{lower: 30, upper: 90}}); every length is fixed")
     if problem.objective.minimize not in ("ripple", "-ratio"):
-        raise ProblemError(f"{problem.source}: objective.minimize: a front is of the ripple "
-                           f"against the ratio; give minimize: ripple (got "
-                           f"{problem.objective.minimize})")
+        raise ProblemError(f"{problem.source}: objective.minimize: a front is of the least "
+                           f"ripple; give minimize: ripple (got {problem.objective.minimize})")
+    axis = axis_of(problem)
+    if not axis.is_ratio and (problem.eccentricity_range is not None or
+                              problem.objective.robust == "worst_case"):
+        raise ProblemError(f"{problem.source}: pareto.against: a front against {axis.name} "
+                           f"is held at listed eccentricities of a nominal design, not over a "
+                           f"regulation interval or a tolerance box")
     run = _Sweep(problem, out_dir, points, workers, resume, scheduler, progress)
     return run.run()
 
@@ -184,7 +190,9 @@ class _Sweep:
 
     def __init__(self, problem, out_dir, points, workers, resume, scheduler, progress):
         self.t0 = time.perf_counter()
-        self.problem, self.scheduler = problem, scheduler
+        self.problem, self.scheduler = with_axis(problem), scheduler
+        self.axis = axis_of(problem)
+        self.ends = ("least_ripple", self.axis.end)
         self.section = problem.sections.get("pareto") or ParetoSection(source=problem.source)
         self.n_points = points or self.section.points or DEFAULT_POINTS
         self.counts = list(self.section.counts or problem.counts())
@@ -194,6 +202,8 @@ class _Sweep:
                          "ratio_lower": self.section.ratio_lower,
                          "ratio_upper": self.section.ratio_upper,
                          "refine": asdict(self.section.refine)}
+        if not self.axis.is_ratio:      # a ratio front's settings stay as they were
+            self.settings["against"] = self.axis.name
         self.out = Path(out_dir)
         self.journal = Journal(self.out / "points.jsonl")
         self.done = {tuple(r["key"]): r for r in self.journal.start(self.settings, resume)}
@@ -216,7 +226,7 @@ class _Sweep:
         interrupted = True
         try:
             for n in self.counts:
-                missing = [k for k in ENDS if (n, k) not in self.done]
+                missing = [k for k in self.ends if (n, k) not in self.done]
                 for k in missing:
                     self.running[self.ex.submit(worker.solve_end, self.problem, n, k)] = (n, None)
                 if not missing:
@@ -228,12 +238,12 @@ class _Sweep:
                     count, j = self.running.pop(fut)
                     self.finish(fut.result())
                     if j is None:
-                        if all((count, k) in self.done for k in ENDS):
+                        if all((count, k) in self.done for k in self.ends):
                             self.open_count(count)
                     elif j != "round":
                         self.submit_chain(count, j)
                     if all(c != count for c, _ in self.running.values()) and \
-                            all((count, k) in self.done for k in ENDS):
+                            all((count, k) in self.done for k in self.ends):
                         self.advance(count)
                     if time.perf_counter() - self.rebuilt >= REBUILD_EVERY_S:
                         _rebuild(self.problem, self.done, self.out, self.settings)
@@ -346,20 +356,20 @@ class _Sweep:
 
     def open_count(self, count: int) -> None:
         """Both ends of a count are known: lay out its ε grid and start its chains."""
-        ends = {k: self.done[(count, k)] for k in ENDS}
-        if not ends["least_ripple"]["feasible"]:
+        ends = {k: self.done[(count, k)] for k in self.ends}
+        lo_end, hi_end = (ends[k] for k in self.ends)
+        if not lo_end["feasible"]:
             return
         eps = grid(self.section, ends, self.n_points)
         if len(eps) == 0:
             return
-        lo_end, hi_end = ends["least_ripple"], ends["largest_ratio"]
         interior = list(range(len(eps)))
-        if eps[0] == lo_end["ratio"] and (count, 0) not in self.done:
+        if eps[0] == refine.gain(lo_end) and (count, 0) not in self.done:
             self.finish(worker.copy_end(lo_end, 0) | {"round": 0})
-        if eps[0] == lo_end["ratio"]:
+        if eps[0] == refine.gain(lo_end):
             interior.remove(0)
         last = len(eps) - 1
-        if last > 0 and hi_end["feasible"] and eps[-1] == hi_end["ratio"]:
+        if last > 0 and hi_end["feasible"] and eps[-1] == refine.gain(hi_end):
             if (count, last) not in self.done:
                 self.finish(worker.copy_end(hi_end, last) | {"round": 0})
             interior.remove(last)
@@ -374,9 +384,10 @@ class _Sweep:
 
 def _rebuild(problem, done: dict, out: Path, settings: dict) -> ParetoResult:
     """The front from every finished record, pareto.csv/json rewritten atomically."""
+    axis = axis_of(problem)
     records = refine.visible(list(done.values()), list(problem.model.lengths))
-    points = frame(records, list(problem.model.lengths))
-    overall, per_count = evaluate(points)
+    points = frame(records, list(problem.model.lengths), axis)
+    overall, per_count = evaluate(points, axis)
     ends = [r for r in records if isinstance(r["key"][1], str)]
     result = ParetoResult(points, overall, per_count, run=dict(settings), ends=ends)
     write_front(result, out)

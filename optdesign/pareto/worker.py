@@ -17,6 +17,7 @@ from ..errors import OptDesignError
 from ..solve import PhaseSolver, solve_phase
 from ..criteria import LengthConstraint, constraints_of
 from ..quantities import design_quantities
+from .axis import axis_of
 from ..sensitivity import sensitivity_record
 from ..solve.starts import start_designs
 
@@ -73,6 +74,12 @@ class _Point:
             design[problem.model.count_variable] = self.count
         exact = figures is not None and feasible
         columns = criteria_columns(problem, values or problem.start_values())
+        quantities = _quantities(problem, figures) if exact else None
+        axis = axis_of(problem)
+        value = axis.value_of({"quantities": quantities}) if exact else None
+        gain = {} if axis.is_ratio else {       # the front's second objective, and its slope
+            axis.name: value, "gain": axis.sign * value if value is not None else None,
+            "gain_multiplier": None if multiplier is None else axis.sign * multiplier}
         return {"key": [self.count, self.tag], "phases": self.count, "kind": self.kind,
                 "epsilon": self.epsilon, "status": status, "feasible": feasible,
                 "design": design,
@@ -81,9 +88,9 @@ class _Point:
                 "min_transmission_angle_deg": figures.min_angle_deg if exact else None,
                 "sensitivities": sensitivity_record(
                     problem, design, getattr(figures, "evaluation", None)) if exact else None,
-                "quantities": _quantities(problem, figures) if exact else None,
+                "quantities": quantities, **gain,
                 **{k: (v if feasible else None) for k, v in columns.items()},
-                "ratio_multiplier": multiplier,
+                "ratio_multiplier": multiplier if axis.is_ratio else None,
                 "binding": "; ".join(a["name"] for a in active or []),
                 "ratio_limited_by": "; ".join(a["name"] for a in limited_by or []),
                 "ipopt_status": ipopt_status,
@@ -99,32 +106,47 @@ def solve_end(problem, count: int, kind: str) -> dict:
     ratio held at that value (a lexicographic optimum, so the end point is not dominated).
     """
     point = _Point(problem, count, kind, kind)
+    axis = axis_of(problem)
     if kind == "least_ripple":
         res = solve_phase(problem, count, solver=_solver(problem, count))
         point.iterations, point.tries = res.iterations, len(res.starts)
         if res.status != "optimal":
             return point.record(res.status, note=res.message)
-        slack = res.ratio - problem.objective.min_ratio > 1e-6
+        slack = res.ratio - problem.objective.min_ratio > 1e-6 if axis.is_ratio else True
         return point.record("optimal", res.design, _Ver.of(res), 0.0 if slack else None,
                             "Solve_Succeeded", active=res.active)
-    q = replace(problem, objective=replace(problem.objective, minimize="-ratio",
+    q = replace(problem, objective=replace(problem.objective, minimize=axis.objective,
                                            max_ripple=LOOSE_MAX_RIPPLE))
     res = solve_phase(q, count, solver=_solver(q, count))
     point.iterations, point.tries = res.iterations, len(res.starts)
     if res.status != "optimal":
         return point.record(res.status, note=res.message)
-    limits = [a for a in res.active if a["name"] != "max_ripple"]   # the cap is loose
-    ratio = res.ratio * (1 - END_RATIO_BACKOFF)
-    outcome = _solver(problem, count).solve_from(dict(res.design), min_ratio=ratio)
+    limits = [a for a in res.active if a["name"] not in ("max_ripple", axis.name)]
+    gain = axis.gain_of({"ratio": res.ratio, "quantities": res.quantities})
+    epsilon = gain * (1 - END_RATIO_BACKOFF) if gain >= 0 else gain * (1 + END_RATIO_BACKOFF)
+    outcome = _solver(problem, count).solve_from(dict(res.design), **_bound(axis, epsilon))
     rec, ver = outcome.record, outcome.verification
     point.iterations += rec.iterations
     if rec.feasible and ver.delta <= res.delta:
-        point.tries, point.epsilon = point.tries + 1, ratio
+        point.tries, point.epsilon = point.tries + 1, epsilon
         return point.record("optimal", outcome.values, ver,
-                            rec.ratio_multiplier if rec.ipopt_status == "Solve_Succeeded"
+                            _multiplier(axis, rec) if rec.ipopt_status == "Solve_Succeeded"
                             else None, rec.ipopt_status, active=rec.active, limited_by=limits)
     return point.record("optimal", res.design, _Ver.of(res), None, "Solve_Succeeded",
                         active=res.active, limited_by=limits)
+
+
+def _bound(axis, epsilon: float) -> dict:
+    """The keyword of ``PhaseSolver.solve_from`` that holds the gain at least ``epsilon``."""
+    return {"min_ratio": epsilon} if axis.is_ratio else {"bound": axis.bound(epsilon)}
+
+
+def _multiplier(axis, record) -> float | None:
+    """d δ / d (the quantity's bound) at a point: the ratio's own multiplier, or the active
+    set's sensitivity of the axis's bound (0 where it is slack)."""
+    if axis.is_ratio:
+        return record.ratio_multiplier
+    return next((a["sensitivity"] for a in record.active if a["name"] == axis.name), 0.0)
 
 
 def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
@@ -147,7 +169,8 @@ def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
         point.tries += 1
         solver.avoid = [c.outcome.values for c in found if c.feasible] if secondary else []
         try:
-            outcome = solver.solve_from(dict(values), min_ratio=epsilon, secondary=secondary)
+            outcome = solver.solve_from(dict(values), secondary=secondary,
+                                        **_bound(axis_of(problem), epsilon))
         except (OptDesignError, RuntimeError, ValueError, ArithmeticError) as exc:
             # one start that breaks the evaluator (CasADi raises RuntimeError) is one failed
             # start, not a failed sweep
@@ -183,7 +206,8 @@ def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
                 break
     if best is not None:
         rec = best.outcome.record
-        mult = rec.ratio_multiplier if rec.ipopt_status == "Solve_Succeeded" else None
+        mult = _multiplier(axis_of(problem), rec) if rec.ipopt_status == "Solve_Succeeded" \
+            else None
         out = point.record("optimal", best.outcome.values, best.outcome.verification, mult,
                            rec.ipopt_status, active=rec.active)
         return out | {"start_from": best.source} | tags
@@ -240,9 +264,11 @@ def best_candidate(candidates: list) -> "Candidate | None":
 
 
 def copy_end(end: dict, index: int) -> dict:
-    """An end-point record re-keyed as grid point ``index``."""
+    """An end-point record re-keyed as grid point ``index`` (its ε the gain it reaches when
+    it was solved without one)."""
+    reached = end["gain"] if "gain" in end else end["ratio"]
     return end | {"key": [end["phases"], index], "time_s": 0.0, "iterations": 0, "tries": 0,
-                  "epsilon": end["ratio"] if end["epsilon"] is None else end["epsilon"]}
+                  "epsilon": reached if end["epsilon"] is None else end["epsilon"]}
 
 
 def _quantities(problem, figures) -> dict:

@@ -117,9 +117,12 @@ class PhaseSolver:
             return verify(problem, values, held, search)
 
     def solve_from(self, values: dict, min_ratio=None, max_ripple=None,
-                   ver: Verification | None = None, secondary: bool = False) -> Outcome:
+                   ver: Verification | None = None, secondary: bool = False,
+                   bound=None) -> Outcome:
         """IPOPT from one start; refined until the exact check agrees with the NLP's structure.
 
+        ``min_ratio``, ``max_ripple`` and ``bound`` (a QuantityBound, tightening the problem's
+        own bound of that quantity) move bounds for this solve only, as a Pareto point's ε.
         A quasi-Newton run that stalls (or runs out of iterations) is retried once with the
         exact Hessian, unless the start is ``secondary`` (a further basin polished beside the
         best one: a stalled run there is abandoned, not rescued)."""
@@ -130,6 +133,8 @@ class PhaseSolver:
                           max_ripple=problem.objective.max_ripple if max_ripple is None
                           else max_ripple)
             problem = replace(problem, objective=obj)
+        if bound is not None:
+            problem = tightened(problem, bound)
         # a start is checked at the listed eccentricities only; the first polish's result is
         # searched over the whole regulation interval
         ver = ver or self.verify(problem, values, search=False)
@@ -423,6 +428,21 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
                           f"eccentricity with {count} phases")
         return result
     return _no_optimum(result)
+
+
+def tightened(problem, bound):
+    """``problem`` with its bound of ``bound``'s quantity (at the same eccentricity)
+    intersected with ``bound``."""
+    specs, found = [], False
+    for spec in problem.constraints.quantities:
+        if spec.key == bound.key:
+            spec = replace(spec, lower=max(spec.lower, bound.lower),
+                           upper=min(spec.upper, bound.upper))
+            found = True
+        specs.append(spec)
+    if not found:
+        specs.append(bound)
+    return replace(problem, constraints=replace(problem.constraints, quantities=tuple(specs)))
 
 
 def _no_optimum(result: PhaseResult) -> PhaseResult:

@@ -147,7 +147,7 @@ def _evaluate(problem, count, base, free, X, sampled: dict | None = None
         score = objective_of(problem).key(q)
         if sampled is not None:
             sampled.update(delta=np.asarray(q.worst_ripple, float),
-                           ratio=np.asarray(q.ratio, float))
+                           ratio=np.asarray(q.ratio, float), quantities=q.quantities)
     violation = np.where(np.isnan(violation), np.inf, violation)
     score = np.where(np.isfinite(score), score, np.inf)
     return score, violation

@@ -16,8 +16,8 @@ from .conftest import small
     ({"counts": 4}, "small.yaml: pareto.counts must be a non-empty list of phase counts"),
     ({"counts": [6]}, "small.yaml: pareto.counts [6] not admissible for design.phases "
                       "(admissible: 4)"),
-    ({"span": 1}, "small.yaml: pareto.span is not a known key; known: counts, points, "
-                  "ratio_lower, ratio_upper, refine"),
+    ({"span": 1}, "small.yaml: pareto.span is not a known key; known: against, counts, "
+                  "points, ratio_lower, ratio_upper, refine"),
     ({"refine": {"max_gap": 0}}, "small.yaml: pareto.refine.max_gap must be positive (got 0)"),
     ({"refine": {"max_points": -1}},
      "small.yaml: pareto.refine.max_points must be at least 0 (got -1)"),

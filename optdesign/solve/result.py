@@ -97,6 +97,46 @@ class SolveResult(Tabular):
     #: every quantity's exact value of the best design (see PhaseResult.quantities)
     quantities: dict = field(default_factory=dict)
 
+    # ------------------------------------------------- scipy.optimize.OptimizeResult's names
+    @property
+    def success(self) -> bool:
+        """scipy's name: True when a verified optimum was found (``status == "optimal"``)."""
+        return self.status == "optimal"
+
+    @property
+    def x(self):
+        """scipy's name: the best design's lengths as an array, in the mechanism's order
+        (None without an optimum); :attr:`design` names them."""
+        if self.design is None:
+            return None
+        import numpy as np
+
+        from ..mechanisms import get_mechanism
+        return np.array([self.design[k] for k in get_mechanism(self.mechanism).lengths])
+
+    @property
+    def fun(self) -> float | None:
+        """scipy's name: the objective at the optimum (δ, -ratio or the quantity's value, as
+        ``objective.minimize`` says; the robust solve's worst δ)."""
+        best = self.best_phase()
+        if best is None:
+            return None
+        if self.worst_case_delta is not None:
+            return self.worst_case_delta
+        minimize = self.objective.get("minimize", "ripple")
+        if minimize == "ripple":
+            return best.delta
+        if minimize == "-ratio":
+            return -best.ratio
+        name = minimize.lstrip("-")
+        value = best.quantities["values"][name]
+        return -value if minimize.startswith("-") else value
+
+    @property
+    def nit(self) -> int:
+        """scipy's name: IPOPT iterations of the whole solve."""
+        return self.iterations
+
     def best_phase(self) -> PhaseResult | None:
         if self.design is None:
             return None

@@ -153,3 +153,22 @@ def test_grashof_constraint_is_wired_and_met(write_problem):
     d = r.design
     longest = max(d["l0"], d["l2"], d["l3"])
     assert d["l1"] + longest <= d["l0"] + d["l2"] + d["l3"] - longest + 1e-6
+
+
+def test_the_result_answers_to_scipys_names():
+    """``success``, ``x``, ``fun`` and ``nit`` as scipy.optimize.OptimizeResult has them."""
+    import numpy as np
+
+    from optdesign.problem import load_problem
+    from optdesign.solve import solve
+    from tests.conftest import ROOT
+
+    problem = load_problem(ROOT / "problems" / "housing_disc.yaml")
+    r = solve(problem)
+    assert r.success is True and r.nit == r.iterations > 0
+    assert r.fun == r.delta
+    np.testing.assert_array_equal(r.x, [r.design[k] for k in problem.model.lengths])
+    from dataclasses import replace
+    least = solve(replace(problem, objective=replace(problem.objective,
+                                                     minimize="housing_radius")))
+    assert least.fun == least.quantities["values"]["housing_radius"]

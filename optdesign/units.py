@@ -97,6 +97,10 @@ UNITS: dict[str, str] = {
              "rounds)", "merged": COUNT,
     "max_gap": "- (normalised objectives)", "max_points": COUNT,
     "hypervolume_gap": "- (normalised objective area)", "hypervolume_points": COUNT,
+    "delta_resolution": "- (pareto.resolution.delta: no point between neighbours closer in "
+                        "delta and the gain)",
+    "gain_resolution": "the unit of the ratio or of the quantity swept against "
+                       "(pareto.resolution; null: 1e-3 of its value)",
     # bench accuracy
     "samples": COUNT, "smoothing": "- (rho, per unit of omega/omega1)",
     "delta_error": "- (absolute)", "delta_signed": "- (delta - reference delta)",

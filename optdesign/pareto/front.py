@@ -9,6 +9,7 @@ import numpy as np
 from ..tabular import Tabular
 from .axis import Axis
 from .indicators import indicators, non_dominated, objectives
+from .refine import VERIFIED
 
 #: leading columns of pareto.csv (docs/contract.md names the first nine); the
 #: mechanism's own design keys replace l0 .. l3 for other mechanisms
@@ -56,7 +57,7 @@ def frame(records: list[dict], lengths: list[str], axis: Axis = Axis()):
     if len(df):
         df = df.sort_values(["phases", "epsilon", "index"], kind="stable").reset_index(
             drop=True)
-        ok = df["status"] == "optimal"
+        ok = df["status"].isin(VERIFIED)
         f = objectives(df.loc[ok, "delta"], gain(df.loc[ok], axis))
         df.loc[ok, "non_dominated"] = non_dominated(f)
         for n, group in df[ok].groupby("phases"):
@@ -89,6 +90,11 @@ class ParetoResult(Tabular):
     def axis(self) -> Axis:
         """What the ripple is traded against (the ratio unless ``pareto.against`` says)."""
         return Axis(self.run.get("against", "ratio"))
+
+    @property
+    def resolution(self) -> float:
+        """The δ resolution the front was judged at (``pareto.resolution.delta``)."""
+        return float((self.run.get("refine") or {}).get("delta_resolution", 1e-4))
 
     @property
     def front(self):
@@ -161,10 +167,12 @@ def _plain(row: dict) -> dict:
     return out
 
 
-def evaluate(points, axis: Axis = Axis()) -> tuple[dict, dict]:
-    """Indicators of the overall front (knee as a row label of ``points``) and per count."""
-    ok = points[points["status"] == "optimal"]
-    named = {"name": axis.name, "sign": axis.sign}
+def evaluate(points, axis: Axis = Axis(), flat_below: float | None = None
+             ) -> tuple[dict, dict]:
+    """Indicators of the overall front (knee as a row label of ``points``) and per count;
+    a front whose δ spans less than ``flat_below`` is flat, its knee the largest-gain end."""
+    ok = points[points["status"].isin(VERIFIED)]
+    named = {"name": axis.name, "sign": axis.sign, "flat_below": flat_below}
     overall = indicators(ok["delta"], gain(ok, axis), **named)
     if overall["knee"] is not None:
         overall["knee"] = int(ok.index[overall["knee"]])

@@ -101,20 +101,27 @@ def knee(z: np.ndarray) -> int:
 
 
 def indicators(delta, ratio, ideal=None, nadir=None, name: str = "ratio",
-               sign: float = 1.0) -> dict:
+               sign: float = 1.0, flat_below: float | None = None) -> dict:
     """Hypervolume, spacing and knee of the non-dominated subset of (δ, ratio) points; a
     front of one design has neither hypervolume nor spacing (None), not the ideal's value.
     ``ratio`` may be any gain (larger better) of the quantity ``name``, gain = sign·value:
-    the ideal and the nadir then name the quantity's own values."""
+    the ideal and the nadir then name the quantity's own values.
+
+    A front whose δ spans less than ``flat_below`` (the δ resolution a designer reads) is
+    *flat*: δ is the same to them over the whole front, the normalised knee would pick a bend
+    of noise, so the knee is the end of the largest gain (``flat`` true)."""
     f = objectives(delta, ratio)
     mask = non_dominated(f) if len(f) else np.zeros(0, bool)
     front = f[mask]
     if len(front) == 0:
-        return {"n_points": 0, "hypervolume": 0.0, "spacing": float("nan"), "knee": None}
+        return {"n_points": 0, "hypervolume": 0.0, "spacing": float("nan"), "knee": None,
+                "flat": False}
+    flat = flat_below is not None and len(front) > 1 and \
+        float(np.ptp(front[:, 0])) < flat_below
     z, ideal, nadir = normalise(front, ideal, nadir)
-    k = knee(z)
+    k = int(np.argmin(front[:, 1])) if flat else knee(z)
     single = len(front) == 1        # no trade-off: the normalisation has nothing to span
-    return {"n_points": int(len(front)),
+    return {"n_points": int(len(front)), "flat": bool(flat),
             "hypervolume": None if single else hypervolume_2d(z),
             "spacing": None if single else spacing(z),
             "knee": int(np.flatnonzero(mask)[k]),

@@ -9,7 +9,9 @@ from one past the largest index among them.
   takes its place (one that does not is dropped); designs of one count whose lengths agree
   within :data:`SAME_LENGTH_REL` are one row (``merged`` counts the others).
 - :func:`plan`: the next round's solves. Each point dominated by another verified point of
-  its count is re-solved at its ε from the dominating design (once). Then new ε values go
+  its count, or beaten on its own ε-problem by any verified design of its count (a design of
+  less δ that reaches its ε: :func:`beater`), is re-solved at its ε from that design (once);
+  one still beaten after it is shown ``local``, never ``optimal``. Then new ε values go
   into the gaps of the count's front that are longer than ``max_gap`` in normalised
   (ratio, δ) distance, or where the slope dδ/d ratio (the ε multiplier) turns by more than
   ``max_turn_deg`` between neighbours, at most ``max_points`` in all, the longest gaps first.
@@ -40,6 +42,10 @@ SETTLED_SHARE = 0.125
 TURN_GAP_SHARE = 0.25
 #: q dominates p only by more than these shares (not by IPOPT's noise)
 DOMINANCE_REL = 1e-6
+#: the status of a verified point that a known design beats on its own ε-problem
+LOCAL = "local"
+#: the statuses of a verified feasible design on a front
+VERIFIED = ("optimal", LOCAL)
 
 DEFAULT_MAX_GAP = 0.1
 DEFAULT_MAX_POINTS = 12
@@ -48,11 +54,17 @@ DEFAULT_MAX_TURN_DEG = 30.0
 HYPERVOLUME_ROUNDS = 4
 DEFAULT_HYPERVOLUME_GAP = 3e-5
 DEFAULT_HYPERVOLUME_POINTS = 100
+#: the resolution a designer reads δ at, and the gain's relative to its size (a ratio of 0.6
+#: to 6e-4, a housing radius of 300 mm to 0.3 mm)
+DEFAULT_DELTA_RESOLUTION = 1e-4
+GAIN_RESOLUTION_REL = 1e-3
 
 
 @dataclass(frozen=True)
 class Refinement:
-    """``pareto.refine``: whether and how far the front is refined after the uniform pass."""
+    """``pareto.refine``: whether and how far the front is refined after the uniform pass;
+    ``delta_resolution`` and ``gain_resolution`` (``pareto.resolution``) are the scales a
+    designer reads: no point is added between neighbours that differ by less in both."""
 
     enabled: bool = True
     max_gap: float = DEFAULT_MAX_GAP
@@ -60,6 +72,23 @@ class Refinement:
     max_turn_deg: float = DEFAULT_MAX_TURN_DEG
     hypervolume_gap: float = DEFAULT_HYPERVOLUME_GAP
     hypervolume_points: int = DEFAULT_HYPERVOLUME_POINTS
+    delta_resolution: float = DEFAULT_DELTA_RESOLUTION
+    #: in the gain's unit; None: GAIN_RESOLUTION_REL of the gain's size (at least 1)
+    gain_resolution: float | None = None
+
+    def gain_step(self, a: float, b: float) -> float:
+        """The gain resolution between neighbours of gains ``a`` and ``b``."""
+        if self.gain_resolution is not None:
+            return self.gain_resolution
+        return GAIN_RESOLUTION_REL * max(abs(a), abs(b), 1.0)
+
+    def resolvable(self, a: dict, b: dict) -> int:
+        """How many parts the stretch between neighbours ``a`` and ``b`` can be split into
+        with each part still wider than the resolution in δ or in the gain (0: none, the two
+        are one point to a designer)."""
+        parts = max(abs(b["delta"] - a["delta"]) / self.delta_resolution,
+                    abs(gain(b) - gain(a)) / self.gain_step(gain(a), gain(b)))
+        return int(math.floor(parts + 1e-9)) if parts > 1 else 0
 
 
 @dataclass
@@ -158,12 +187,20 @@ def merge_identical(records: list[dict], lengths: list[str]) -> list[dict]:
 
 def visible(records: list[dict], lengths: list[str]) -> list[dict]:
     """The grid records a front shows (see the module's docstring); the raw end solves and
-    the other keys pass through."""
+    the other keys pass through. A point that a verified design of its count beats on its own
+    ε-problem (:func:`beater`; any record, any round, the ends) is shown with status
+    ``local``: a verified design, but not the optimum of its problem."""
     grid = [r for r in records if not isinstance(_index(r), str)]
     other = [r for r in records if isinstance(_index(r), str)]
     out = []
     for n in sorted({r["phases"] for r in grid}):
-        out += merge_identical(superseded([r for r in grid if r["phases"] == n]), lengths)
+        mine = [r for r in grid if r["phases"] == n]
+        known = [r for r in mine if _ok(r)] + [r for r in other if r.get("phases") == n and
+                                              _ok(r)]
+        for r in merge_identical(superseded(mine), lengths):
+            if r.get("status") == "optimal" and _ok(r) and beater(r, known) is not None:
+                r = r | {"status": LOCAL}
+            out.append(r)
     return out + other
 
 
@@ -210,6 +247,8 @@ def gaps(front: list[dict], tried: list[dict], settings: Refinement) -> list[Gap
         if not (dist > settings.max_gap or (turn is not None and turn > settings.max_turn_deg
                                             and dist > TURN_GAP_SHARE * settings.max_gap)):
             continue
+        if settings.resolvable(a, b) < 2:
+            continue            # the two neighbours are one point at the designer's scales
         lo, hi = gain(a), gain(b)
         inside = [t for t in tried if t.get("epsilon") is not None and lo < t["epsilon"] < hi]
         if any(not _ok(t) for t in inside):
@@ -238,10 +277,14 @@ def share_out(want: list[int], worth, budget: int, cost: list[int] | None = None
         budget -= cost[i]
 
 
-def allocate(found: list[Gap], budget: int, max_gap: float) -> list[int]:
-    """New points per gap: each wants ceil(distance / max_gap) − 1 (at least one); with too
-    small a budget, one at a time to the gap whose share (distance / (given + 1)) is longest."""
-    return share_out([max(1, math.ceil(g.distance / max_gap) - 1) for g in found],
+def allocate(found: list[Gap], budget: int, max_gap: float,
+             settings: "Refinement | None" = None) -> list[int]:
+    """New points per gap: each wants ceil(distance / max_gap) − 1 (at least one, at most
+    what the resolution leaves room for); with too small a budget, one at a time to the gap
+    whose share (distance / (given + 1)) is longest."""
+    room = [settings.resolvable(g.lower, g.upper) - 1 if settings else math.inf for g in found]
+    return share_out([max(1, min(math.ceil(g.distance / max_gap) - 1, r))
+                      for g, r in zip(found, room)],
                      lambda i, k: found[i].distance / (k + 1), budget)
 
 
@@ -252,6 +295,27 @@ def _non_dominated(rows: list[dict]) -> list[dict]:
         return []
     mask = non_dominated(objectives([r["delta"] for r in rows], [gain(r) for r in rows]))
     return [r for r, keep in zip(rows, mask) if keep]
+
+
+def beater(p: dict, known: list[dict]) -> dict | None:
+    """The verified design of least δ in ``known`` (designs of p's count) that beats ``p`` on
+    p's own problem, or None. An ε point's problem is the least δ at a gain of at least its ε:
+    any design of less δ (by more than :data:`DOMINANCE_REL`) that reaches ε beats it. The
+    least-ripple end's is the least δ at any gain; the best-gain end's the largest gain
+    (then the least δ there)."""
+    kind, eps = p.get("kind"), p.get("epsilon")
+    less = [q for q in known if q is not p and _ok(q) and
+            q["delta"] < p["delta"] * (1 - DOMINANCE_REL)]
+    if kind == "least_ripple":
+        found = less
+    elif kind not in ("sweep", None):                # the best-gain end
+        found = [q for q in known if q is not p and _ok(q) and gain(q) > _more(gain(p))] + \
+            [q for q in less if gain(q) >= _less(gain(p))]
+    elif eps is None:
+        return None
+    else:
+        found = [q for q in less if gain(q) >= _less(eps)]
+    return min(found, key=lambda q: (q["delta"], -gain(q)), default=None)
 
 
 def dominated(front: list[dict]) -> list[tuple[dict, dict]]:
@@ -268,6 +332,19 @@ def dominated(front: list[dict]) -> list[tuple[dict, dict]]:
     return out
 
 
+def beaten(front: list[dict], known: list[dict]) -> list[tuple[dict, dict]]:
+    """(point, the design to re-solve it from) for every point of ``front`` another point
+    dominates (its best dominator) or a design of ``known`` beats on its own ε-problem
+    (:func:`beater`)."""
+    pairs = dict((_index(p), (p, q)) for p, q in dominated(front))
+    for p in front:
+        if _index(p) not in pairs:
+            q = beater(p, known)
+            if q is not None and q.get("design"):
+                pairs[_index(p)] = (p, q)
+    return list(pairs.values())
+
+
 def plan(records: list[dict], lengths: list[str], settings: Refinement,
          first_index: int) -> list[Task]:
     """The next round's solves for one count, from its finished grid records (the rounds
@@ -278,7 +355,8 @@ def plan(records: list[dict], lengths: list[str], settings: Refinement,
     attempted = {r.get("replaces") for r in records if r.get("replaces") is not None}
     tasks: list[Task] = []
     index = first_index
-    for p, q in sorted(dominated(shown), key=lambda pq: _index(pq[0])):
+    for p, q in sorted(beaten(shown, [r for r in records if _ok(r)]),
+                       key=lambda pq: _index(pq[0])):
         if _index(p) in attempted or p.get("epsilon") is None:
             continue
         tasks.append(Task(index, float(p["epsilon"]), q["design"], replaces=_index(p)))
@@ -287,7 +365,7 @@ def plan(records: list[dict], lengths: list[str], settings: Refinement,
         return tasks
     used = sum(1 for r in records if (r.get("round") or 0) >= 1 and r.get("replaces") is None)
     found = gaps(_non_dominated(shown), records, settings)
-    given = allocate(found, settings.max_points - used, settings.max_gap)
+    given = allocate(found, settings.max_points - used, settings.max_gap, settings)
     new = []
     for g, k in zip(found, given):
         for j in range(1, k + 1):
@@ -340,11 +418,13 @@ def plan_hypervolume(records: list[dict], lengths: list[str], settings: Refineme
     """
     if not settings.enabled or settings.hypervolume_points <= 0:
         return []
-    used = sum(1 for r in records if (r.get("round") or 0) > MAX_ROUNDS)
+    again = _beaten_again(records, lengths, least_index)
+    used = sum(1 for r in records if (r.get("round") or 0) > MAX_ROUNDS and
+               r.get("replaces") is None)
     budget = settings.hypervolume_points - used
     front = _front_of_every_count(records, lengths)
     if budget <= 0 or len(front) < 2:
-        return []
+        return again
     r_span = gain(front[-1]) - gain(front[0])
     d_span = max(r["delta"] for r in front) - min(r["delta"] for r in front)
     if r_span <= 0 or d_span <= 0:
@@ -352,7 +432,7 @@ def plan_hypervolume(records: list[dict], lengths: list[str], settings: Refineme
     candidates = []                  # (area, [(count, lo, hi, start, also)])
     for a, b in zip(front, front[1:]):
         dx, dy = (gain(b) - gain(a)) / r_span, abs(b["delta"] - a["delta"]) / d_span
-        if dx * dy <= settings.hypervolume_gap:
+        if dx * dy <= settings.hypervolume_gap or settings.resolvable(a, b) < 2:
             continue
         counts = [b["phases"]] + ([a["phases"]] if a["phases"] != b["phases"] else [])
         ta, tb = (_angle(_slope(p), r_span, d_span) for p in (a, b))
@@ -373,21 +453,43 @@ def plan_hypervolume(records: list[dict], lengths: list[str], settings: Refineme
             also = [a["design"]] if n == b["phases"] == a["phases"] and turns else []
             jobs.append((n, lo, hi, start["design"], also))
         if jobs:
-            candidates.append((dx * dy, jobs))
-    given = share_out([max(1, math.ceil(math.sqrt(area / settings.hypervolume_gap)) - 1)
-                       for area, _ in candidates],
+            candidates.append((dx * dy, jobs, settings.resolvable(a, b)))
+    given = share_out([max(1, min(math.ceil(math.sqrt(area / settings.hypervolume_gap)) - 1,
+                                  room - 1)) for area, _, room in candidates],
                       lambda i, k: candidates[i][0] / (k + 1) ** 2, budget,
-                      cost=[len(jobs) for _, jobs in candidates])
+                      cost=[len(jobs) for _, jobs, _ in candidates])
     index = {}
     for r in records:
         if not isinstance(_index(r), str):
             index[r["phases"]] = max(index.get(r["phases"], least_index), _index(r) + 1)
+    for t in again:
+        index[t.count] = max(index.get(t.count, least_index), t.task.index + 1)
     out = []
-    for (_, jobs), k in zip(candidates, given):
+    for (_, jobs, _), k in zip(candidates, given):
         for n, lo, hi, start, also in jobs:
             for j in range(1, k + 1):
                 i = index.setdefault(n, least_index)
                 index[n] = i + 1
                 out.append(CountTask(n, Task(i, float(lo + (hi - lo) * j / (k + 1)), start,
                                              also=also)))
+    return again + out
+
+
+def _beaten_again(records: list[dict], lengths: list[str], least_index: int
+                  ) -> list[CountTask]:
+    """Re-solves, at the start of a hypervolume round, of every point a design found since
+    beats on its own ε-problem and not re-solved yet (outside the round's budget)."""
+    out = []
+    for n in sorted({r["phases"] for r in records if not isinstance(_index(r), str)}):
+        mine = [r for r in records if r.get("phases") == n and not isinstance(_index(r), str)]
+        attempted = {r.get("replaces") for r in mine if r.get("replaces") is not None}
+        shown = merge_identical([r for r in superseded(mine) if _ok(r)], lengths)
+        index = max([least_index] + [_index(r) + 1 for r in mine])
+        for p, q in sorted(beaten(shown, [r for r in mine if _ok(r)]),
+                           key=lambda pq: _index(pq[0])):
+            if _index(p) in attempted or p.get("epsilon") is None:
+                continue
+            out.append(CountTask(n, Task(index, float(p["epsilon"]), q["design"],
+                                         replaces=_index(p))))
+            index += 1
     return out

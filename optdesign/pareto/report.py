@@ -16,7 +16,7 @@ import numpy as np
 
 from .axis import Axis
 from .indicators import REFERENCE
-from .refine import MAX_ROUNDS
+from .refine import LOCAL, MAX_ROUNDS, VERIFIED
 
 MARKERS = "osD^v<>p*h"
 
@@ -29,7 +29,7 @@ def plot_fronts(points, ax=None, title: str | None = None, axis: Axis = Axis()):
     plt = pyplot()
     x = axis.name
     fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(figsize=(7.5, 5))
-    ok = points[points["status"] == "optimal"]
+    ok = points[points["status"].isin(VERIFIED)]
     for j, (n, g) in enumerate(ok.groupby("phases")):
         front = g[g["count_front"]].sort_values(x)
         line, = ax.plot(front[x], front["delta"], marker=MARKERS[j % len(MARKERS)],
@@ -46,6 +46,10 @@ def plot_fronts(points, ax=None, title: str | None = None, axis: Axis = Axis()):
     nd = ok[ok["non_dominated"]]
     ax.plot(nd[x], nd["delta"], "o", ms=10, mfc="none", mec="black", mew=1.0,
             label="non-dominated over every n")
+    local = ok[ok["status"] == LOCAL]
+    if len(local):
+        ax.plot(local[x], local["delta"], "x", ms=9, color="darkorange", mew=2.0, zorder=6,
+                label="local: a known design beats it on its own ε")
     if "knee" in points.attrs and points.attrs["knee"] is not None:
         k = points.loc[points.attrs["knee"]]
         ax.plot(k[x], k["delta"], "*", ms=16, color="crimson", mec="black",
@@ -84,7 +88,7 @@ def plot_lengths(points, bounds: dict, axes=None, title: str | None = None,
             ax.set_visible(False)
     axes = list(np.atleast_1d(axes).ravel())
     fig = axes[0].figure
-    ok = points[points["status"] == "optimal"]
+    ok = points[points["status"].isin(VERIFIED)]
     knee = points.attrs.get("knee")
     for ax, name in zip(axes, names):
         for j, (n, g) in enumerate(ok.groupby("phases")):
@@ -173,6 +177,13 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
                             f"dominating them" if again else "")
                          + f"; {int(pts['merged'].fillna(0).sum())} ε point(s) that reached a "
                            f"design already listed are merged into its row."))
+    stretches = jumps(result)
+    if stretches:
+        out.append(("h2", "Where the front jumps"))
+        out.append(("p", f"Stretches of the overall front longer than a tenth of its {x} span "
+                         f"with no design inside: the ε values solved there (if any) reached "
+                         f"designs outside the stretch, so the front jumps across it."))
+        out.append(("table", [f"from {x}", f"to {x}", "δ from", "δ to", "why"], stretches))
     if images.get("lengths.png") is not None:
         out.append(("h2", "Lengths along the front"))
         out.append(("p", f"Each free length of every phase count's front against the {x} it "
@@ -211,6 +222,7 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
     knee = result.knee
     if knee is not None:
         out.append(("h2", "The knee design (best compromise)"))
+        out.append(("p", knee_reason(result)))
         out.append(("p", f"n = {int(knee['phases'])}: " + ", ".join(
             f"{k} = {knee[k]:.3f} mm" for k in lengths) +
             f"; δ = {knee['delta']:.5f}, ratio = {knee['ratio']:.5f}"
@@ -234,7 +246,15 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
     rows = [[_fmt(r[c], 5 if c in ("delta", "ratio") else 3) if c != "phases" else
              int(r[c]) for c in cols] for _, r in result.front.iterrows()]
     out.append(("table", head, rows))
-    failed = result.points[result.points["status"] != "optimal"]
+    local = result.points[result.points["status"] == LOCAL]
+    if len(local):
+        out.append(("p", f"{len(local)} point(s) are local (× in the figure): a verified "
+                         f"design of their phase count meets their ε with less ripple, and a "
+                         f"re-solve from it did not reach it; their status is local, not "
+                         f"optimal, and the better design is on the front: "
+                         + "; ".join(f"n = {int(r.phases)}, ε = {r.epsilon:.5g}, δ = "
+                                     f"{r.delta:.5f}" for r in local.itertuples())))
+    failed = result.points[~result.points["status"].isin(VERIFIED)]
     if len(failed):
         out.append(("p", f"{len(failed)} sweep point(s) reached no verified feasible design: "
                          + "; ".join(f"n = {int(r.phases)}, ε = {r.epsilon:.4f}: {r.status}"
@@ -242,6 +262,69 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
     out.append(("h2", "How the run was made"))
     out.append(("table", ["", ""], [[k, _fmt(v)] for k, v in info.items()]))
     return out
+
+
+#: a stretch of the overall front longer than this share of its span is reported as a jump
+JUMP_SHARE = 0.1
+
+
+def jumps(result) -> list[list]:
+    """The stretches of the overall front, longer than :data:`JUMP_SHARE` of its span in the
+    quantity swept against, that no design fills, with why: a change of phase count, a bound
+    or constraint that binds at one end and not at the other, else a second branch of
+    designs (the lengths differ at the two ends)."""
+    x = result.axis.name
+    front = result.front
+    if len(front) < 2:
+        return []
+    values = front[x].to_numpy(dtype=float)
+    span = float(values.max() - values.min())
+    rows = []
+    for (_, a), (_, b) in zip(front.iloc[:-1].iterrows(), front.iloc[1:].iterrows()):
+        if span <= 0 or abs(b[x] - a[x]) <= JUMP_SHARE * span:
+            continue
+        if a["phases"] != b["phases"]:
+            why = f"the phase count changes (n = {int(a['phases'])} to {int(b['phases'])})"
+        else:
+            ba = {t.strip() for t in str(a.get("binding") or "").split(";") if t.strip()}
+            bb = {t.strip() for t in str(b.get("binding") or "").split(";") if t.strip()}
+            if ba != bb:
+                names = sorted(ba ^ bb)
+                why = "what binds changes: " + ", ".join(names)
+            else:
+                why = "a second branch of designs (the same constraints bind at both ends)"
+        rows.append([f"{a[x]:.5g}", f"{b[x]:.5g}", f"{a['delta']:.5f}", f"{b['delta']:.5f}",
+                     why])
+    return rows
+
+
+def knee_reason(result) -> str:
+    """Why the knee is the design it is, on the spans a designer reads: a flat front (δ the
+    same within its resolution) recommends its best end; otherwise the spans the knee was
+    judged on."""
+    ind, axis = result.indicators, result.axis
+    ideal, nadir = ind.get("ideal") or {}, ind.get("nadir") or {}
+    if not ideal:
+        return "One design: it is the recommendation."
+    x = axis.name
+    lo, hi = sorted((ideal[x], nadir[x]))
+    span = f"{x} {lo:.5g}–{hi:.5g}" + ("" if axis.unit == "-" else f" {axis.unit}")
+    best = "largest" if axis.sign > 0 else "least"
+    if ind.get("flat"):
+        return (f"The front is flat: δ is the same within {result.resolution:g} (the δ "
+                f"resolution) over {span}, so the knee is the end of the {best} {x}: take it, "
+                f"it costs no ripple a designer can read.")
+    text = (f"The front spans δ {ideal['delta']:.5f}–{nadir['delta']:.5f} over {span}; the "
+            f"knee is the design farthest from the chord between its two ends, on both "
+            f"spans scaled to one: the bend where more {x} starts to cost most ripple.")
+    knee, end = result.knee, result.front.iloc[-1 if axis.sign > 0 else 0]
+    if knee is not None and end.name != knee.name and knee["delta"] > 0 and knee[x] != 0:
+        more = abs(end[x] - knee[x]) / abs(knee[x])
+        cost = (end["delta"] - knee["delta"]) / knee["delta"]
+        text += (f" The {best}-{x} end of the front, {x} {end[x]:.5g} at δ {end['delta']:.5f}, "
+                 f"gives {100 * more:.3g} % {'more' if axis.sign > 0 else 'less'} {x} than the "
+                 f"knee for {100 * cost:.3g} % more ripple.")
+    return text
 
 
 def _nadir(ind, x: str = "ratio") -> str:
@@ -298,8 +381,11 @@ def render_html(items) -> str:
 def summary_text(result) -> str:
     """The indicators and the knee, printed by ``optdesign pareto``."""
     ind = result.indicators
-    lines = [f"{len(result.points)} points, {int((result.points['status'] == 'optimal').sum())}"
-             f" verified feasible; {ind['n_points']} non-dominated over every phase count"]
+    status = result.points["status"]
+    local = int((status == LOCAL).sum())
+    lines = [f"{len(result.points)} points, {int(status.isin(VERIFIED).sum())} verified feasible"
+             + (f" ({local} local: a known design beats them on their own ε)" if local else "")
+             + f"; {ind['n_points']} non-dominated over every phase count"]
     for n, v in result.per_count.items():
         lines.append(f"  n = {n}: {v['n_points']} non-dominated, hypervolume "
                      f"{_fmt(v['hypervolume'])}, spacing {_fmt(v['spacing'])}"
@@ -316,4 +402,5 @@ def summary_text(result) -> str:
                      f"{knee['ratio']:.5f}" + ("" if axis.is_ratio else
                                                f", {axis.name} = {knee[axis.name]:.5g} "
                                                f"{axis.unit}"))
+        lines.append(knee_reason(result))
     return "\n".join(lines)

@@ -21,13 +21,15 @@ achievable range is harmless; a span that misses it leaves that count with no sw
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ..declarations import Key, names
 from .axis import choices as axis_choices
-from .refine import (DEFAULT_HYPERVOLUME_GAP, DEFAULT_HYPERVOLUME_POINTS, DEFAULT_MAX_GAP,
-                     DEFAULT_MAX_POINTS, DEFAULT_MAX_TURN_DEG, HYPERVOLUME_ROUNDS, MAX_ROUNDS,
-                     Refinement)
+from ..quantities import get_quantity
+from .refine import (DEFAULT_DELTA_RESOLUTION, DEFAULT_HYPERVOLUME_GAP,
+                     DEFAULT_HYPERVOLUME_POINTS, DEFAULT_MAX_GAP, DEFAULT_MAX_POINTS,
+                     DEFAULT_MAX_TURN_DEG, GAIN_RESOLUTION_REL, HYPERVOLUME_ROUNDS,
+                     MAX_ROUNDS, Refinement)
 
 DEFAULT_POINTS = 12
 MAX_POINTS = 1000
@@ -46,6 +48,18 @@ DECLARATION = Key(
         Key("ratio_upper", "number", "... to this ratio (must exceed ratio_lower)", unit="-",
             lower=0, open_lower=True, default_text="the largest ratio the linkage reaches",
             example=0.8),
+        Key("resolution", "mapping", "the scales a designer reads the front at: no point is "
+            "added between neighbours that differ by less in both δ and the quantity swept "
+            "against (docs/pareto.md)", default={"delta": DEFAULT_DELTA_RESOLUTION},
+            default_text="delta 1e-4; the ratio (or the "
+            f"quantity) {GAIN_RESOLUTION_REL:g} of its value", keys=(
+                Key("delta", "number", "δ's resolution", unit="-",
+                    default=DEFAULT_DELTA_RESOLUTION, lower=0, open_lower=True, upper=1),
+                *(Key(name, "number", f"the resolution of {name}",
+                      unit=get_quantity(name).unit, lower=0, open_lower=True,
+                      default_text=f"{GAIN_RESOLUTION_REL:g} of its value",
+                      condition="" if name == "ratio" else f"with against: {name}")
+                  for name in axis_choices()))),
         Key("counts", "list", "phase counts to sweep", item=Key("counts", "integer",
             "a phase count", lower=1), min_items=1, default_text="every admissible count",
             example=[6], condition="each one the design admits"),
@@ -129,4 +143,19 @@ def parse_section(raw, reader) -> ParetoSection:
         declared = DECLARATION.key("refine")
         kw["refine"] = Refinement(**{k: declared.key(k).read(reader, v, f"refine.{k}")
                                      for k, v in block.items()})
+    if raw.get("resolution") is not None:
+        kw["refine"] = _resolution(reader, raw["resolution"], kw.get("against", "ratio"),
+                                   kw.get("refine", Refinement()))
     return ParetoSection(**kw)
+
+
+def _resolution(reader, raw, against: str, refine: Refinement) -> Refinement:
+    """``resolution: {delta, AGAINST}`` into the refinement's settings."""
+    block = reader.mapping(raw, "resolution")
+    reader.known_keys(block, "resolution", {"delta", against})
+    declared = DECLARATION.key("resolution")
+    values = {k: declared.key(k).read(reader, v, f"resolution.{k}") for k, v in block.items()}
+    sign = 1.0          # a resolution is a size: the gain's sign does not matter
+    return replace(refine, delta_resolution=values.get("delta", refine.delta_resolution),
+                   gain_resolution=sign * values[against] if against in values
+                   else refine.gain_resolution)

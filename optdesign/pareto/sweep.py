@@ -350,7 +350,9 @@ class _Sweep:
                 continue
             # between two verified neighbours of a front the screening has seeded at every
             # uniform point already: polished from the neighbours alone
-            self.submit_round([(ct.count, ct.task, [], {"round": r}) for ct in missing])
+            self.submit_round([(ct.count, ct.task, [], {"round": r} | (
+                {"replaces": ct.task.replaces} if ct.task.replaces is not None else {}))
+                for ct in missing])
             return True
         return False
 
@@ -385,9 +387,10 @@ class _Sweep:
 def _rebuild(problem, done: dict, out: Path, settings: dict) -> ParetoResult:
     """The front from every finished record, pareto.csv/json rewritten atomically."""
     axis = axis_of(problem)
+    section = problem.sections.get("pareto") or ParetoSection()
     records = refine.visible(list(done.values()), list(problem.model.lengths))
     points = frame(records, list(problem.model.lengths), axis)
-    overall, per_count = evaluate(points, axis)
+    overall, per_count = evaluate(points, axis, section.refine.delta_resolution)
     ends = [r for r in records if isinstance(r["key"][1], str)]
     result = ParetoResult(points, overall, per_count, run=dict(settings), ends=ends)
     write_front(result, out)

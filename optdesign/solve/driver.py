@@ -77,6 +77,10 @@ class Timings:
         return asdict(self)
 
 
+#: the IPOPT status of a known design taken as it is (:meth:`PhaseSolver.as_it_is`)
+AS_IT_IS = "Known_Design_As_It_Is"
+
+
 @dataclass
 class Outcome:
     """What one polish returns: the IPOPT record, the exact verification of the design it
@@ -126,15 +130,7 @@ class PhaseSolver:
         A quasi-Newton run that stalls (or runs out of iterations) is retried once with the
         exact Hessian, unless the start is ``secondary`` (a further basin polished beside the
         best one: a stalled run there is abandoned, not rescued)."""
-        problem = self.problem
-        if min_ratio is not None or max_ripple is not None:
-            obj = replace(problem.objective,
-                          min_ratio=problem.objective.min_ratio if min_ratio is None else min_ratio,
-                          max_ripple=problem.objective.max_ripple if max_ripple is None
-                          else max_ripple)
-            problem = replace(problem, objective=obj)
-        if bound is not None:
-            problem = tightened(problem, bound)
+        problem = self.at(min_ratio, max_ripple, bound)
         # a start is checked at the listed eccentricities only; the first polish's result is
         # searched over the whole regulation interval
         ver = ver or self.verify(problem, values, search=False)
@@ -225,6 +221,30 @@ class PhaseSolver:
                              delta=ver.delta, note=note, ratio_multiplier=multiplier,
                              active=active if status in SUCCESS else [])
         return Outcome(record, ver, values, surrogate)
+
+    def at(self, min_ratio=None, max_ripple=None, bound=None):
+        """The problem with a Pareto point's bounds (see :meth:`solve_from`)."""
+        problem = self.problem
+        if min_ratio is not None or max_ripple is not None:
+            obj = replace(problem.objective,
+                          min_ratio=problem.objective.min_ratio if min_ratio is None else min_ratio,
+                          max_ripple=problem.objective.max_ripple if max_ripple is None
+                          else max_ripple)
+            problem = replace(problem, objective=obj)
+        if bound is not None:
+            problem = tightened(problem, bound)
+        return problem
+
+    def as_it_is(self, values: dict, min_ratio=None, max_ripple=None, bound=None) -> Outcome:
+        """``values`` verified exactly under the point's bounds, without a polish: a known
+        design that meets them is itself a candidate for the point (IPOPT from it may end in
+        a worse local optimum)."""
+        problem = self.at(min_ratio, max_ripple, bound)
+        ver = self.verify(problem, values)
+        record = StartRecord(start=dict(values), ipopt_status=AS_IT_IS, iterations=0,
+                             time_s=0.0, feasible=bool(ver.feasible), delta=ver.delta,
+                             note="the start itself, verified under the point's bounds")
+        return Outcome(record, ver, dict(values), None)
 
     def worst_cases(self, problem, values) -> tuple:
         """The tolerance analysis of ``values`` (:func:`optdesign.solve.robust.worst_cases`)."""

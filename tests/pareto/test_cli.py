@@ -17,7 +17,11 @@ from .conftest import small
     ({"counts": [6]}, "small.yaml: pareto.counts [6] not admissible for design.phases "
                       "(admissible: 4)"),
     ({"span": 1}, "small.yaml: pareto.span is not a known key; known: against, counts, "
-                  "points, ratio_lower, ratio_upper, refine"),
+                  "points, ratio_lower, ratio_upper, refine, resolution"),
+    ({"resolution": {"housing_radius": 0.1}},
+     "small.yaml: pareto.resolution.housing_radius is not a known key; known: delta, ratio"),
+    ({"resolution": {"delta": 0}}, "small.yaml: pareto.resolution.delta must be positive "
+                                   "(got 0)"),
     ({"refine": {"max_gap": 0}}, "small.yaml: pareto.refine.max_gap must be positive (got 0)"),
     ({"refine": {"max_points": -1}},
      "small.yaml: pareto.refine.max_points must be at least 0 (got -1)"),

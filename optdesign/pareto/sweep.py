@@ -280,8 +280,13 @@ class _Sweep:
         eps = float(c["eps"][i])
         fut = self.ex.submit(worker.solve_point, self.problem, count, i, eps, c["start"],
                              fallbacks, self.seeds(count, eps, [c["start"]]), [],
-                             {"round": 0})
+                             {"round": 0}, self.known(count))
         self.running[fut] = (count, j)
+
+    def known(self, count: int) -> list[dict]:
+        """The count's verified ends' designs: every ε point weighs them as they are."""
+        ends = [self.done.get((count, k)) for k in self.ends]
+        return [e["design"] for e in ends if e and e.get("feasible") and e.get("design")]
 
     def seeds(self, count: int, epsilon: float, near: list[dict]) -> list[dict]:
         """The screening's best basins that reach ``epsilon`` (``solver.basins`` of them),
@@ -328,7 +333,7 @@ class _Sweep:
         self.bar.refresh()
         for count, t, seeds, tags in jobs:
             fut = self.ex.submit(worker.solve_point, self.problem, count, t.index, t.epsilon,
-                                 t.start, [], seeds, t.also, tags)
+                                 t.start, [], seeds, t.also, tags, self.known(count))
             self.running[fut] = (count, "round")
 
     def advance_hypervolume(self) -> bool:

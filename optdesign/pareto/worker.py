@@ -151,12 +151,14 @@ def _multiplier(axis, record) -> float | None:
 
 def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
                 fallbacks: list[dict], seeds: list[dict] = (), also: list[dict] = (),
-                tags: dict | None = None) -> dict:
+                tags: dict | None = None, known: list[dict] = ()) -> dict:
     """Least ripple subject to ratio >= ε: polished from ``start`` (the chain's previous
     design) and each of ``also`` (further warm starts: a refined point's other neighbour),
     then from each of ``seeds`` (the screening's best basins that reach ε, as secondary
-    polishes stopped once they join an optimum already found); the best verified design
-    wins (:func:`best_candidate`). Only when none is feasible: from each of ``fallbacks``,
+    polishes stopped once they join an optimum already found); then each of ``known``
+    (verified designs of the count: its ends) and, for a re-solve, its start are candidates
+    as they are, verified under the point's bound, so no point ends worse than a known
+    design that meets its ε; the best verified design wins (:func:`best_candidate`). Only when none is feasible: from each of ``fallbacks``,
     then from the multi-start designs. ``tags`` are added to the record (its round, the point
     a re-solve replaces)."""
     point = _Point(problem, count, index, "sweep", epsilon)
@@ -191,12 +193,16 @@ def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
     for values in seeds:
         if not any(_beside(problem, values, c.outcome.values) for c in found if c.feasible):
             attempt(values, "screening", secondary=bool(found))
-    if tags.get("replaces") is not None and start:
-        # the design that beats the point meets its bound: it is a candidate as it is, so a
-        # re-solve never ends worse than the design that called for it
-        point.tries += 1
-        found.append(Candidate(solver.as_it_is(dict(start), **_bound(axis_of(problem),
-                                                                     epsilon)), "dominating"))
+    as_they_are = [(d, "known design") for d in known if d] + \
+        ([(start, "dominating")] if tags.get("replaces") is not None and start else [])
+    for values, source in as_they_are:
+        # a known design that meets the bound is a candidate as it is: a polish that ends in
+        # a worse local optimum never stands (and a re-solve never ends worse than the
+        # design that called for it)
+        if not any(c.outcome.values == values for c in found):
+            point.tries += 1
+            found.append(Candidate(solver.as_it_is(dict(values), **_bound(axis_of(problem),
+                                                                          epsilon)), source))
     best = best_candidate(found)
     if best is None:
         def rescue():

@@ -30,6 +30,9 @@ class EccentricityEvaluation:
     peak_angles: np.ndarray                  # grid angle of each driving curve's maximum
     chain_angles_deg: np.ndarray             # least transmission angle of every chain
     cos_extreme_angles: np.ndarray           # grid angles of max cos μ, then min cos μ, per chain
+    #: the design sampled on the search grid (theta, dtheta, ddtheta, cos_mu): what the turn
+    #: quantities read instead of sampling it again
+    sampled: dict | None = field(default=None, repr=False, compare=False)
 
     @property
     def sequence(self) -> tuple[int, ...]:
@@ -166,7 +169,7 @@ def _evaluate_at(design: Design, stroke: str, input_speed: float, e: float,
     cos_mu = sampled["cos_mu"]
     extremes = np.concatenate([phi[np.argmax(cos_mu, axis=1)], phi[np.argmin(cos_mu, axis=1)]])
     return EccentricityEvaluation(e, figures, runs, phi[np.argmax(speeds, axis=1)],
-                                  angles, extremes)
+                                  angles, extremes, sampled)
 
 
 def evaluate_problem(problem, values=None, strokes: tuple[str, ...] | None = None,

@@ -284,9 +284,11 @@ class _Sweep:
         self.running[fut] = (count, j)
 
     def known(self, count: int) -> list[dict]:
-        """The count's verified ends' designs: every ε point weighs them as they are."""
+        """The count's verified ends (design, δ and gain): every ε point weighs them as they
+        are where one would beat its polishes."""
         ends = [self.done.get((count, k)) for k in self.ends]
-        return [e["design"] for e in ends if e and e.get("feasible") and e.get("design")]
+        return [{"design": e["design"], "delta": e["delta"], "gain": refine.gain(e)}
+                for e in ends if e and e.get("feasible") and e.get("design")]
 
     def seeds(self, count: int, epsilon: float, near: list[dict]) -> list[dict]:
         """The screening's best basins that reach ``epsilon`` (``solver.basins`` of them),

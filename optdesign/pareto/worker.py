@@ -156,9 +156,10 @@ def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
     design) and each of ``also`` (further warm starts: a refined point's other neighbour),
     then from each of ``seeds`` (the screening's best basins that reach ε, as secondary
     polishes stopped once they join an optimum already found); then each of ``known``
-    (verified designs of the count: its ends) and, for a re-solve, its start are candidates
-    as they are, verified under the point's bound, so no point ends worse than a known
-    design that meets its ε; the best verified design wins (:func:`best_candidate`). Only when none is feasible: from each of ``fallbacks``,
+    (the count's verified ends: ``design``, ``delta`` and ``gain``) and, for a re-solve, its
+    start are candidates as they are, verified under the point's bound, so no point ends
+    worse than a known design that meets its ε; the best verified design wins
+    (:func:`best_candidate`). Only when none is feasible: from each of ``fallbacks``,
     then from the multi-start designs. ``tags`` are added to the record (its round, the point
     a re-solve replaces)."""
     point = _Point(problem, count, index, "sweep", epsilon)
@@ -193,12 +194,17 @@ def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
     for values in seeds:
         if not any(_beside(problem, values, c.outcome.values) for c in found if c.feasible):
             attempt(values, "screening", secondary=bool(found))
-    as_they_are = [(d, "known design") for d in known if d] + \
+    # A known design that meets the bound is a candidate as it is: a polish that ends in a
+    # worse local optimum never stands, and a re-solve never ends worse than the design that
+    # called for it. An end is verified under the bound only where its record says it would
+    # win (its gain reaches ε and its δ beats the polishes'): one exact check, seldom.
+    ahead = best_candidate(found)
+    wins = [k["design"] for k in known if k.get("design") and
+            k["gain"] >= epsilon - 1e-9 * max(1.0, abs(epsilon)) and
+            (ahead is None or k["delta"] < ahead.delta * (1 - IMPROVEMENT))]
+    as_they_are = [(d, "known design") for d in wins] + \
         ([(start, "dominating")] if tags.get("replaces") is not None and start else [])
     for values, source in as_they_are:
-        # a known design that meets the bound is a candidate as it is: a polish that ends in
-        # a worse local optimum never stands (and a re-solve never ends worse than the
-        # design that called for it)
         if not any(c.outcome.values == values for c in found):
             point.tries += 1
             found.append(Candidate(solver.as_it_is(dict(values), **_bound(axis_of(problem),

@@ -6,6 +6,8 @@ differentiated once more), with d²θ_k/dφ² by algorithmic differentiation.
 """
 from __future__ import annotations
 
+import numpy as np
+
 from .base import TurnQuantity
 
 
@@ -20,6 +22,10 @@ class PeakAcceleration(TurnQuantity):
     def expression(self, model, phi, p, count):
         dd = model["ddtheta"]
         return [dd[k] for k in range(dd.numel())] + [-dd[k] for k in range(dd.numel())]
+
+    def from_kinematics(self, sampled):
+        dd = sampled["ddtheta"]
+        return np.vstack([dd, -dd])
 
     def components(self, maxima, input_speed):
         return input_speed ** 2 * maxima       # both signs: the largest is max |d²θ/dt²|

@@ -103,9 +103,16 @@ class TurnQuantity(Quantity):
         an angle of its own, what the NLP holds at the components' stationary points."""
         return _tracked(self, mechanism, count, options)
 
-    def maxima(self, design, eccentricity: float = 1.0):
+    def from_kinematics(self, sampled: dict):
+        """g on the exact evaluator's grid from its sampling of the kinematics (``theta``,
+        ``dtheta``, ``ddtheta`` at the search grid, which starts at φ = 0), or None where g
+        needs more (joints): saves sampling the design again."""
+        return None
+
+    def maxima(self, design, eccentricity: float = 1.0, sampled: dict | None = None):
         """Each component's maximum over the turn, exactly (:func:`turn_maxima`),
-        remembered for the designs evaluated last (a solve's check and its next start)."""
+        remembered for the designs evaluated last (a solve's check and its next start).
+        ``sampled``: the evaluation's sampling at this eccentricity, when at hand."""
         from ..exact import search_grid
 
         key = (self.name, design.mechanism, design.option_key,
@@ -115,15 +122,19 @@ class TurnQuantity(Quantity):
             g, dg = self.function(design.model, design.count, design.option_key)
             breaks = sorted({float(b) % (2 * math.pi)
                              for b in design.breakpoints(eccentricity)})
-            known = turn_maxima(g, dg, design.p_fixed(eccentricity),
-                                search_grid(design, eccentricity), breaks)
+            phi = search_grid(design, eccentricity)
+            grid = self.from_kinematics(sampled) if sampled is not None else None
+            if grid is not None and grid.shape[1] != phi.size:
+                grid = None                 # sampled on another grid: sample it here
+            known = turn_maxima(g, dg, design.p_fixed(eccentricity), phi, breaks, grid)
             if len(_MAXIMA) >= _MAXIMA_SIZE:
                 _MAXIMA.pop(next(iter(_MAXIMA)))
             _MAXIMA[key] = known
         return known
 
     def exact(self, evaluation, eccentricity, ripple="midrange"):
-        maxima = self.maxima(evaluation.design, eccentricity).values
+        at = evaluation.at(eccentricity)
+        maxima = self.maxima(evaluation.design, eccentricity, at.sampled).values
         figures = np.asarray(self.components(maxima, evaluation.input_speed), dtype=float)
         return self.worst_of(figures)
 

@@ -38,7 +38,7 @@ class TurnMaxima:
 
 
 def turn_maxima(function, derivative, p: np.ndarray, phi: np.ndarray,
-                breaks=()) -> TurnMaxima:
+                breaks=(), grid: np.ndarray | None = None) -> TurnMaxima:
     """The maxima over φ of every component of ``function(φ, p)``.
 
     Each local maximum of a component on the grid brackets a stationary maximum between its
@@ -54,8 +54,10 @@ def turn_maxima(function, derivative, p: np.ndarray, phi: np.ndarray,
         The grid the stationary points are bracketed on (increasing, in [0, 2π)).
     breaks : iterable of float
         Crank angles where g may jump (a piecewise mechanism's breakpoints).
+    grid : array, optional
+        g at ``phi`` already (components, angles), e.g. from the evaluation's sampling.
     """
-    grid = _sample(function, phi, p)
+    grid = _sample(function, phi, p) if grid is None else np.asarray(grid, dtype=float)
     g_at, dg_at = buffered(function), buffered(derivative)
     values, angles = grid.max(axis=1), phi[grid.argmax(axis=1)].astype(float)
     n = phi.size

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import casadi as ca
+import numpy as np
 
 from .base import TurnQuantity
 
@@ -27,6 +28,12 @@ class Swing(TurnQuantity):
             moved = theta - ca.substitute(theta, phi, ca.SX(0.0))
             out.append(ca.atan2(ca.sin(moved), ca.cos(moved)))
         return out + [-x for x in out]
+
+    def from_kinematics(self, sampled):
+        theta = sampled["theta"]
+        moved = theta - theta[:, :1]                     # the grid's first angle is φ = 0
+        moved = np.arctan2(np.sin(moved), np.cos(moved))
+        return np.vstack([moved, -moved])
 
     def components(self, maxima, input_speed):
         n = maxima.shape[0] // 2

@@ -146,7 +146,7 @@ def start_guess(nlp, ver: Verification) -> dict:
         pad = np.full(nlp.slots - handovers.size, handovers[0] if handovers.size else 0.0)
         guess[f"phi_handover_{tag}"] = np.concatenate([handovers, pad])
         for name in nlp.turn:
-            maxima = get_quantity(name).maxima(ev.design, e)
+            maxima = get_quantity(name).maxima(ev.design, e, x.sampled)
             guess[f"phi_q_{name}_{tag}"] = maxima.angles
             guess[f"constant_{name}_{tag}"] = maxima.constant
     for spec in nlp.specs:

@@ -129,6 +129,13 @@ class _Dask:
             self.client.close()
 
 
+def _is_terminal(stream) -> bool:
+    try:
+        return stream.isatty()
+    except (AttributeError, ValueError):
+        return False
+
+
 def _executor(workers: int | None, scheduler):
     if scheduler is not None:
         return _Dask(scheduler)
@@ -215,8 +222,13 @@ class _Sweep:
         refined = sum(1 for r in self.done.values() if (r.get("round") or 0) >= 1)
         self.bar = tqdm(total=len(self.counts) * (self.n_points + 2) + refined,
                         initial=self.n_resumed,
-                        desc="pareto", unit="point", file=sys.stderr,
+                        desc="ends and uniform pass", unit="point", file=sys.stderr,
                         disable=None if progress else True, dynamic_ncols=True)
+        #: off a terminal the bar is silent: one line a round says where the sweep is
+        self.pipe = progress and not _is_terminal(sys.stderr)
+        self.say(f"the ends and the uniform pass: {self.bar.total - self.n_resumed} points "
+                 f"planned ({len(self.counts)} phase count(s) × {self.n_points} ε values and "
+                 f"2 ends)" + (f", {self.n_resumed} resumed" if self.n_resumed else ""))
         self.running: dict = {}       # future -> (count, chain, None (an end) or "round")
         self.chains: dict = {}        # (count, j) -> {"order", "pos", "start", "eps", "ends"}
         self.screened: dict = {}      # count -> ScreenedCount (the box screened once)
@@ -253,6 +265,7 @@ class _Sweep:
             self.bar.close()
             self.ex.close(interrupted)
         result = _rebuild(self.problem, self.done, self.out, self.settings)
+        self.say(f"done: {len(self.done)} solves journalled ({self.n_resumed} resumed)")
         result.run.update({"wall_time_s": time.perf_counter() - self.t0,
                            "resumed_points": self.n_resumed,
                            "workers": "dask" if self.scheduler is not None else self.n_workers})
@@ -329,10 +342,27 @@ class _Sweep:
                 for t in missing])
             return
 
+    def say(self, text: str) -> None:
+        """Name the sweep's stage: the bar's label, and a line of its own off a terminal."""
+        self.bar.set_description_str(text.split(":")[0], refresh=False)
+        if self.pipe:
+            print(f"pareto {time.perf_counter() - self.t0:7.1f} s: {text}", file=sys.stderr,
+                  flush=True)
+
     def submit_round(self, jobs: list[tuple]) -> None:
         """Submit a round's solves, (count, task, seeds, journal tags) each."""
         self.bar.total += len(jobs)
         self.bar.refresh()
+        r = jobs[0][3].get("round", 0) if jobs else 0
+        counts = sorted({count for count, *_ in jobs})
+        again = sum(1 for *_, tags in jobs if tags.get("replaces") is not None)
+        kind = "hypervolume round" if r > refine.MAX_ROUNDS else "round"
+        number = r - refine.MAX_ROUNDS if r > refine.MAX_ROUNDS else r
+        where = "every count" if r > refine.MAX_ROUNDS else \
+            ", ".join(f"n = {n}" for n in counts)
+        self.say(f"{kind} {number} ({where}): {len(jobs)} points planned"
+                 + (f", {again} of them re-solves" if again else "")
+                 + f"; {len(self.done)} of {self.bar.total} done")
         for count, t, seeds, tags in jobs:
             fut = self.ex.submit(worker.solve_point, self.problem, count, t.index, t.epsilon,
                                  t.start, [], seeds, t.also, tags, self.known(count))

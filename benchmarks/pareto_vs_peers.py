@@ -2,7 +2,7 @@
 
 The race. For every problem, ours first: ``optdesign pareto P.yaml --out DIR --workers 2`` in
 a child process, timed around the whole process as a user waits for it (start-up, imports,
-the sweep, the report and figures): T_ours. Our front is the ``optimal`` points of
+the sweep, the report and figures): T_ours. Our front is the verified points (``optimal`` or ``local``) of
 DIR/pareto.json, each re-verified here. Then two peers, each for a wall-time budget of
 min(--budget-factor · T_ours, --cap) seconds, on one core:
 

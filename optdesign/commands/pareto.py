@@ -80,28 +80,14 @@ def run(args) -> int:
     return 0 if result.indicators["n_points"] else 1
 
 
-#: seconds to reach a --scheduler before giving up (exit 2)
-SCHEDULER_TIMEOUT_S = 3
-
-
 def _connected(address):
-    """A Dask client of ``address``, connected within SCHEDULER_TIMEOUT_S (a context
-    manager; ``None`` inside when no scheduler is given). An address that is malformed or
-    where no scheduler answers is a usage error, found before any work."""
+    """A Dask client of ``address`` checked within one deadline
+    (:func:`optdesign.pareto.cluster.connect`; a context manager, ``None`` inside when no
+    scheduler is given): an address that is malformed, silent or not a Dask scheduler is a
+    usage error, found before any work."""
     from contextlib import nullcontext
-
-    from ..errors import UsageError, shown
 
     if address is None:
         return nullcontext(None)
-    try:
-        from distributed import Client
-    except ImportError:
-        raise UsageError("--scheduler needs dask distributed: pip install "
-                         "'optdesign[cluster]'") from None
-    try:
-        return Client(address, timeout=SCHEDULER_TIMEOUT_S)
-    except (OSError, ValueError, TypeError) as exc:
-        reason = "malformed address" if isinstance(exc, (ValueError, TypeError)) else \
-            f"no scheduler answered within {SCHEDULER_TIMEOUT_S} s"
-        raise UsageError(f"--scheduler {shown(address)}: {reason}") from None
+    from ..pareto.cluster import connect
+    return connect(address)

@@ -104,9 +104,9 @@ class _Dask:
     """The same tasks on a Dask distributed scheduler (``--scheduler ADDRESS``)."""
 
     def __init__(self, address):
-        from distributed import Client
+        from .cluster import connect
         self.own = isinstance(address, str)
-        self.client = Client(address) if self.own else address
+        self.client = connect(address)      # one deadline, a scheduler checked as such
 
     def submit(self, fn, *args):
         return self.client.submit(fn, *args, pure=False)

@@ -264,7 +264,9 @@ def test_a_damaged_journal_is_refused_and_left_as_it_is(tmp_path, capsys, damage
     out = tmp_path / "out"
     out.mkdir()
     header = {"key": "run", "problem": str(problem)}
-    records = [{"key": [4, tag], "delta": 0.2} for tag in ("least_ripple", 0, 1)]
+    records = [{"key": [4, tag], "phases": 4, "kind": "sweep", "status": "failed",
+                "feasible": False, "design": {}, "delta": None, "ratio": None,
+                "epsilon": None} for tag in ("least_ripple", 0, 1)]
     lines = damage([json.dumps(r) for r in [header, *records]])
     journal = out / "points.jsonl"
     journal.write_text("\n".join(lines) + "\n")

@@ -25,6 +25,8 @@ class Journal:
 
     def __init__(self, path: str | Path):
         self.path = Path(path)
+        #: a resumed record's line in the file, by its key (for messages)
+        self.line_of: dict = {}
 
     def read(self) -> tuple[dict | None, list[dict]]:
         """(run settings, records); a last line cut short by a kill is dropped."""
@@ -74,6 +76,11 @@ class Journal:
             if (rec["key"] == "run") != (number == 1):
                 raise damaged("the first line is not the run's settings" if number == 1
                               else f"line {number} repeats the run's settings")
+            if rec["key"] != "run":
+                wrong = _missing(rec)
+                if wrong:
+                    raise damaged(f"line {number}: {wrong}")
+                self.line_of[tuple(rec["key"])] = number
             parsed.append(rec)
         if not parsed:
             raise damaged("no settings line")
@@ -129,6 +136,28 @@ class Journal:
             what = "a link" if stat.S_ISLNK(mode) else "not a regular file"
             raise ProblemError(f"{self.path}: is {what}; a journal to resume must be a "
                                f"regular file in the output folder (it is left as it is)")
+
+
+#: a record's fields and their types (None allowed where a point has no verified design)
+FIELDS = {"phases": (int,), "kind": (str,), "status": (str,), "feasible": (bool,),
+          "design": (dict,), "delta": (int, float, type(None)),
+          "ratio": (int, float, type(None)), "epsilon": (int, float, type(None))}
+
+
+def _missing(rec: dict) -> str:
+    """What is wrong with a record's fields ('' when nothing): one missing or of the wrong
+    type, a key whose count is not the record's, a feasible record without its figures."""
+    for name, types in FIELDS.items():
+        if name not in rec:
+            return f"the record has no {name}"
+        value = rec[name]
+        if not isinstance(value, types) or (isinstance(value, bool) and bool not in types):
+            return f"the record's {name} is not a {types[0].__name__}"
+    if rec["key"][0] != rec["phases"]:
+        return f"the record's key names count {rec['key'][0]}, its phases {rec['phases']}"
+    if rec["feasible"] and (rec["delta"] is None or rec["ratio"] is None or not rec["design"]):
+        return "a feasible record without its design, delta or ratio"
+    return ""
 
 
 def _record(line: str) -> dict | None:

@@ -214,6 +214,7 @@ class _Sweep:
         self.out = Path(out_dir)
         self.journal = Journal(self.out / "points.jsonl")
         self.done = {tuple(r["key"]): r for r in self.journal.start(self.settings, resume)}
+        _reverify(self.problem, self.done, self.journal)
         self.n_resumed = len(self.done)
         self.ex = _executor(workers, scheduler)
         self.n_workers = workers or os.cpu_count() or 1
@@ -419,6 +420,40 @@ class _Sweep:
             self.chains[(count, j)] = {"order": order, "pos": 0, "start": start["design"],
                                        "eps": eps, "ends": ok_ends}
             self.submit_chain(count, j)
+
+
+#: a resumed record's figures must equal its design's exact ones to this share
+RESUME_REL = 1e-9
+
+
+def _reverify(problem, done: dict, journal: Journal) -> None:
+    """Every resumed feasible record's design evaluated exactly again before it enters a front:
+    its δ, ratio and least transmission angle must be the record's, and the design must meet
+    the problem's constraints. An edited or foreign record is refused (exit 2) with its line;
+    the journal is left as it is."""
+    from ..solve import verify
+
+    for key, rec in done.items():
+        if not rec.get("feasible"):
+            continue
+        where = f"{journal.path}: line {journal.line_of.get(key, '?')}"
+        design = dict(rec["design"])
+        design.setdefault(problem.model.count_variable, rec["phases"])
+        try:
+            ver = verify(problem, design)
+        except (OptDesignError, KeyError, TypeError, ValueError, ArithmeticError) as exc:
+            raise ProblemError(f"{where}: the record's design cannot be evaluated ({exc}); "
+                               f"run without --resume to start afresh") from None
+        figures = {"delta": ver.delta, "ratio": ver.ratio,
+                   "min_transmission_angle_deg": ver.min_angle_deg}
+        wrong = [name for name, exact in figures.items() if exact is None or
+                 rec.get(name) is None or
+                 abs(rec[name] - exact) > RESUME_REL * max(1.0, abs(exact))]
+        if not ver.feasible or wrong:
+            what = ", ".join(f"{n} {rec.get(n)!r} recorded, {figures[n]!r} exact"
+                             for n in wrong) or "the design breaks a constraint"
+            raise ProblemError(f"{where}: the record does not match its design ({what}); "
+                               f"it is left as it is: run without --resume to start afresh")
 
 
 def _rebuild(problem, done: dict, out: Path, settings: dict) -> ParetoResult:

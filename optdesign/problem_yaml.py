@@ -140,7 +140,7 @@ def read_text(path: Path) -> str:
         if stat.S_ISDIR(mode):
             raise ProblemError(f"{path}: is a folder, not a problem file")
         raise ProblemError(f"{path}: is not a regular file (a pipe or a device); "
-                           f"save the problem to a file")
+                           f"save it to a file")
     with os.fdopen(fd, "rb") as fh:
         try:
             data = fh.read(MAX_FILE_BYTES + 1)

@@ -101,15 +101,18 @@ def read_design(path: str, problem) -> dict:
     fault is a UsageError naming the file."""
     import json
     import math
+    from pathlib import Path
 
-    from ..errors import UsageError, shown
+    from ..errors import ProblemError, UsageError, shown
+    from ..problem_yaml import read_text
 
+    try:                        # a regular file of at most 1 MiB (never /dev/zero or a FIFO)
+        text = read_text(Path(path))
+    except ProblemError as exc:
+        reason = str(exc).split(": ", 1)[-1]
+        raise UsageError(f"--design {shown(path)}: {reason}") from None
     try:
-        with open(path, encoding="utf-8") as fh:
-            data = json.load(fh)
-    except OSError as exc:
-        raise UsageError(f"--design {shown(path)}: cannot read it "
-                         f"({exc.strerror or type(exc).__name__})") from None
+        data = json.loads(text)
     except (ValueError, RecursionError):
         raise UsageError(f"--design {shown(path)}: is not JSON") from None
     design = data.get("design") if isinstance(data, dict) else None
@@ -134,4 +137,12 @@ def read_design(path: str, problem) -> dict:
     count = problem.model.count_variable
     if count not in values and len(problem.counts()) > 1:
         raise UsageError(f"--design {shown(path)}: design.{count} is missing")
+    if count in values:
+        admissible = problem.counts()
+        if values[count] != int(values[count]) or int(values[count]) not in admissible:
+            span = f"{admissible[0]}–{admissible[-1]}" if len(admissible) > 1 else \
+                str(admissible[0])
+            raise UsageError(f"--design {shown(path)}: design.{count} must be a whole number "
+                             f"the problem admits ({span}; got {shown(design[count])})")
+        values[count] = int(values[count])
     return values

@@ -65,6 +65,10 @@ def test_the_terminal_table(solved):
     ('{"design": {"l9": 3}}', "design.l9 is not a design key"),
     ('{"design": {"l3": -1}}', "design.l3 must be a positive number"),
     ('{"design": {"l3": 56}, "mechanism": "slotted_lever"}', "is a design of"),
+    ('{"design": {"l3": 56, "phases": 2.5}}', "design.phases must be a whole number the "
+                                               "problem admits (6; got 2.5)"),
+    ('{"design": {"l3": 56, "phases": 100000}}', "design.phases must be a whole number"),
+    ("x" * (1 << 20) + "y", "is larger than 1024 KiB"),
 ])
 def test_a_bad_design_file_is_exit_2(content, message, tmp_path, capsys):
     (tmp_path / "r.json").write_text(content)
@@ -94,3 +98,10 @@ def test_a_bad_out_is_exit_2_before_any_work(tmp_path, capsys, monkeypatch):
     (tmp_path / "f").write_text("x")
     assert main(["tolerance", str(EXAMPLE), "--out", str(tmp_path / "f")]) == 2
     assert "exists and is not a folder" in capsys.readouterr().err
+
+
+def test_a_design_that_is_a_device_is_refused_at_once(tmp_path, capsys):
+    assert main(["tolerance", str(EXAMPLE), "--design", "/dev/zero", "--out",
+                 str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "is not a regular file" in err

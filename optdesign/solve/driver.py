@@ -429,6 +429,9 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
         fixed = _fixed_infeasible(problem, count)
         if fixed is not None:
             return fixed
+    out_of_reach = _beyond_the_box(problem, count)
+    if out_of_reach is not None:
+        return out_of_reach
     if workers is None:
         workers = 1 if solver is not None else workers_for(problem)
     solver = solver or PhaseSolver(problem, count)
@@ -447,7 +450,34 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
         result.message = (f"no design within the bounds assembles at every listed "
                           f"eccentricity with {count} phases")
         return result
-    return _no_optimum(result)
+    result = _no_optimum(result)
+    if result.binding == "min_ratio" and problem.objective.min_ratio > 0:
+        _reachable_ratio(problem, count, result)
+    return result
+
+
+#: the ripple cap of the largest-ratio solve that tells how far a ratio floor is out of reach
+LOOSE_RIPPLE = 10.0
+
+
+def _reachable_ratio(problem, count: int, result: PhaseResult) -> None:
+    """The ratio floor binds and no start met it: the largest ratio any design in the bounds
+    reaches (the same constraints, the floor dropped, the ratio maximised), so the verdict
+    says by how much; below the floor it is ``infeasible``, with that value."""
+    free = replace(problem, objective=replace(problem.objective, minimize="-ratio",
+                                              min_ratio=0.0, max_ripple=LOOSE_RIPPLE,
+                                              robust="none"))
+    best = solve_phase(free, count, workers=1)
+    if best.status != "optimal":
+        return
+    if best.ratio < problem.objective.min_ratio:
+        result.status = "infeasible"
+        result.message = (f"min_ratio {problem.objective.min_ratio:g} is out of reach: the "
+                          f"largest ratio any design in the bounds reaches with {count} phases "
+                          f"is {best.ratio:.6g} (verified), under every other constraint")
+    else:
+        result.message += (f"; a design in the bounds reaches ratio {best.ratio:.6g}: more "
+                           f"starts (solver.starts, solver.screen) may find it")
 
 
 def tightened(problem, bound):
@@ -544,6 +574,43 @@ def _same_optimum(problem, a: Outcome, b: Outcome) -> bool:
     ka, kb = a.verification.key, b.verification.key
     return _close(problem, a.values, b.values, SAME_DESIGN) and \
         abs(ka - kb) <= SAME_KEY_REL * max(1e-3, abs(kb))
+
+
+def _beyond_the_box(problem, count: int) -> PhaseResult | None:
+    """A length constraint no design in the bounds can meet, decided from the bounds alone:
+    a formula linear in the lengths (the four-bar's pin radius, l2 − l2′) takes its extremes
+    over the box at its corners, so a bound beyond them is ``infeasible`` with the reachable
+    value, before any solve."""
+    import itertools
+
+    import casadi as ca
+
+    from ..criteria import LengthConstraint, constraints_of
+
+    names = list(problem.model.lengths)
+    sym = ca.SX.sym("l", len(names))
+    box = [(problem.design[k].lower, problem.design[k].upper) if problem.design[k].is_free
+           else (problem.design[k].value,) * 2 for k in names]
+    for c in constraints_of(problem):
+        if not isinstance(c, LengthConstraint):
+            continue
+        expr = c.formula({k: sym[i] for i, k in enumerate(names)})
+        if ca.depends_on(ca.jacobian(expr, sym), sym):
+            continue                            # not linear: its extremes need not be corners
+        f = ca.Function("f", [sym], [expr])
+        values = [float(f(corner)) for corner in itertools.product(*box)]
+        lower, upper = c.bounds(problem)
+        most, least = max(values), min(values)
+        if most < lower or least > upper:
+            side, reach = ("least", lower) if most < lower else ("most", upper)
+            value = most if most < lower else least
+            unit = "" if c.unit in ("", "-") else f" {c.unit}"
+            return PhaseResult(
+                count, "infeasible", binding=c.name,
+                message=f"{c.name} must be at {side} {reach:g}{unit}, and no design in the "
+                        f"bounds reaches it: the {'largest' if most < lower else 'least'} "
+                        f"{c.name} the bounds allow is {value:g}{unit}")
+    return None
 
 
 def _fixed_infeasible(problem, count: int) -> PhaseResult | None:

@@ -68,6 +68,22 @@ def test_infeasible_ratio_is_detected_and_named(write_problem, tmp_path, capsys)
     assert result["status"] == "infeasible"
     assert "min_ratio" in result["per_phase"][0]["binding"]
     assert json.loads((out / "result.json").read_text())["status"] == "infeasible"
+    # how far out of reach: the largest ratio of the box (the disc problem's 0.728894, with l2
+    # on its bound: the least-ripple design's ratio too), verified
+    assert "min_ratio 3 is out of reach: the largest ratio any design in the bounds reaches " \
+        "with 6 phases is 0.72889" in result["per_phase"][0]["message"]
+
+
+def test_a_pin_radius_beyond_the_box_is_infeasible_with_the_reachable_value(write_problem):
+    """l2 − l2′ is at most 400 − 30 = 370 mm in the disc problem's box: decided from the
+    bounds, before any screening or IPOPT iteration."""
+    data = disc(constraints={**disc()["constraints"], "min_pin_radius": 500})
+    r = solve(load_problem(write_problem(data)))
+    (phase,) = r.per_phase
+    assert r.status == "infeasible" and phase.binding == "pin_radius"
+    assert phase.iterations == 0 and not phase.starts
+    assert phase.message == ("pin_radius must be at least 500 mm, and no design in the bounds "
+                             "reaches it: the largest pin_radius the bounds allow is 370 mm")
 
 
 def test_every_phase_count_is_reported(write_problem):

@@ -19,7 +19,8 @@ import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 
-from .problem import Problem, problem_from_dict
+from .errors import ProblemError, shown
+from .problem import Problem, Reader, problem_from_dict
 from .problem import load_problem as _load_file
 
 __all__ = ["analyze", "as_problem", "load_problem", "pareto", "plot_front", "plot_mechanism",
@@ -40,13 +41,25 @@ def load_problem(source) -> Problem:
 as_problem = load_problem
 
 
+def _design(problem: Problem, design) -> dict | None:
+    """``design`` checked by the loader's rules (:meth:`Problem.checked_values`)."""
+    return None if design is None else problem.checked_values(design)
+
+
+def _eccentricity(problem: Problem, e) -> float:
+    """An eccentricity fraction in (0, 1], as ``regulation.eccentricity`` takes it."""
+    from .problem import _read_regulation
+    return _read_regulation(Reader(f"{problem.source}: argument"), {"eccentricity": [e]})[0][0]
+
+
 def analyze(problem, design: Mapping | None = None):
     """Exact figures of the problem's own design, or of ``design`` (lengths and count; the
     keys a :class:`SolveResult` ``.design`` has). Returns an
     :class:`~optdesign.analysis.AnalysisResult`."""
     from .analysis import analyze as _analyze
 
-    return _analyze(load_problem(problem), None if design is None else dict(design))
+    problem = load_problem(problem)
+    return _analyze(problem, _design(problem, design))
 
 
 def sensitivities(problem, design: Mapping | None = None):
@@ -57,7 +70,7 @@ def sensitivities(problem, design: Mapping | None = None):
     from .sensitivity import sensitivities as _sensitivities
 
     problem = load_problem(problem)
-    return _sensitivities(problem, problem.start_values() | dict(design or {}))
+    return _sensitivities(problem, problem.start_values() | (_design(problem, design) or {}))
 
 
 def solve(problem, progress=None):
@@ -65,6 +78,8 @@ def solve(problem, progress=None):
     (:func:`optdesign.solve.driver.solve`). ``progress``: called once per phase count."""
     from .solve.driver import solve as _solve
 
+    if progress is not None and not callable(progress):
+        raise TypeError(f"progress must be a callable or None (got {type(progress).__name__})")
     return _solve(load_problem(problem), progress=progress)
 
 
@@ -75,9 +90,22 @@ def pareto(problem, out=None, points: int | None = None, workers: int | None = 1
     ``out``: folder for the journal and pareto.csv/json (what ``--resume`` continues); by
     default a temporary folder, removed afterwards (the result is in memory). ``workers``: 1
     (default) solves in this process, None every core."""
+    from .pareto.section import DECLARATION
     from .pareto.sweep import sweep
 
     problem = load_problem(problem)
+    r = Reader(f"{problem.source}: argument")
+    if points is not None:
+        points = DECLARATION.key("points").read(r, points, "points")
+    if workers is not None:
+        workers = r.integer(workers, "workers", 1, 256)
+    if not isinstance(resume, bool):
+        raise TypeError(f"resume must be true or false (got {type(resume).__name__})")
+    if resume and out is None:
+        raise ProblemError(f"{problem.source}: resume=True needs out, the folder of the "
+                           f"journal to continue")
+    if out is not None and not isinstance(out, (str, Path)):
+        raise TypeError(f"out must be a path (got {type(out).__name__})")
     if out is not None:
         return sweep(problem, out, points=points, workers=workers, resume=resume,
                      scheduler=scheduler, progress=progress)
@@ -94,8 +122,8 @@ def plot_speeds(problem, design: Mapping | None = None, eccentricity: float = 1.
     from .plots import plot_speeds as _plot
 
     problem = load_problem(problem)
-    return _plot(Design.from_problem(problem, design), problem.stroke, problem.input_speed,
-                 eccentricity, ax=ax, title=title)
+    return _plot(Design.from_problem(problem, _design(problem, design)), problem.stroke,
+                 problem.input_speed, _eccentricity(problem, eccentricity), ax=ax, title=title)
 
 
 def plot_mechanism(problem, design: Mapping | None = None, angles_deg=(0, 90, 180, 270),
@@ -105,7 +133,13 @@ def plot_mechanism(problem, design: Mapping | None = None, angles_deg=(0, 90, 18
     from .plots import plot_mechanism as _plot
 
     problem = load_problem(problem)
-    return _plot(Design.from_problem(problem, design), angles_deg, eccentricity, title=title)
+    r = Reader(f"{problem.source}: argument")
+    if not isinstance(angles_deg, (list, tuple)) or not 1 <= len(angles_deg) <= 12:
+        raise ProblemError(f"{problem.source}: angles_deg must be a list of 1 to 12 crank "
+                           f"angles in degrees (got {shown(angles_deg)})")
+    angles = [r.number(a, "angles_deg") for a in angles_deg]
+    return _plot(Design.from_problem(problem, _design(problem, design)), angles,
+                 _eccentricity(problem, eccentricity), title=title)
 
 
 def plot_front(front, ax=None, title: str | None = None):

@@ -299,6 +299,65 @@ class Problem:
             design[k] = Variable(k, value=float(v))
         return replace(self, design=design)
 
+    # --------------------------------------------------------------- validated variants
+    def with_design(self, **changes) -> "Problem":
+        """The problem with design keys given anew, each read by the loader's rules (a
+        number fixes a length, ``{lower, upper[, initial]}`` frees it; the count an integer,
+        ``{lower, upper}`` or ``{choices: [...]}``), then checked as a file is. Raises
+        :class:`ProblemError` naming the key."""
+        r = Reader(self.source)
+        raw = {k: _raw_variable(v) for k, v in self.design.items()} | changes
+        problem = replace(self, design=_read_design(r, {"design": raw}, self.model))
+        return _checked_variant(r, problem)
+
+    def with_bounds(self, **bounds) -> "Problem":
+        """The problem with lengths freed between new bounds, ``l3=(30, 90)``; the initial
+        value kept where it lies inside them."""
+        changes = {}
+        for name, pair in bounds.items():
+            if not isinstance(pair, (tuple, list)) or len(pair) != 2:
+                raise ProblemError(f"{self.source}: design.{name}: bounds are a pair "
+                                   f"(lower, upper) (got {shown(pair)})")
+            entry = {"lower": pair[0], "upper": pair[1]}
+            old = self.design.get(name)
+            start = old.start() if isinstance(old, Variable) else None
+            if isinstance(start, float) and all(isinstance(b, (int, float)) and
+                                                not isinstance(b, bool) for b in pair) \
+                    and pair[0] <= start <= pair[1]:
+                entry["initial"] = start
+            changes[name] = entry
+        return self.with_design(**changes)
+
+    def with_eccentricities(self, eccentricity) -> "Problem":
+        """The problem held at other eccentricities: a list of fractions in (0, 1], or an
+        interval ``{"lower": ..., "upper": ...}`` (``regulation.eccentricity``'s rules)."""
+        r = Reader(self.source)
+        ecc, interval = _read_regulation(r, {"eccentricity": eccentricity})
+        problem = replace(self, eccentricities=ecc, eccentricity_range=interval)
+        _check_quantity_criteria(r, problem.constraints, problem.objective, interval)
+        if self.objective.robust == "worst_case":
+            _check_robust(r, self.objective, interval, self.sections)
+        return _checked_variant(r, problem)
+
+    def checked_values(self, values: Mapping) -> dict[str, float]:
+        """``values`` (design keys to numbers: a :class:`SolveResult`'s ``.design``) checked
+        by the loader's rules: known keys, lengths positive finite numbers, the count a whole
+        number within the loader's limits. Raises :class:`ProblemError` naming the key."""
+        r = Reader(self.source)
+        if not isinstance(values, Mapping):
+            raise ProblemError(f"{self.source}: a design is a mapping of design keys to "
+                               f"values (got {type(values).__name__})")
+        r.known_keys(values, "design", {v.name for v in self.model.variables})
+        out = {}
+        for spec in self.model.variables:
+            if spec.name not in values:
+                continue
+            key = f"design.{spec.name}"
+            out[spec.name] = float(r.integer(values[spec.name], key, int(spec.minimum),
+                                             MAX_COUNT)) if spec.integer else \
+                r.number(values[spec.name], key, positive=True)
+        return out
+
 
     def require_section(self, key: str):
         """The parsed ``key:`` section, or a ProblemError naming the file when it is missing."""
@@ -387,6 +446,32 @@ def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "pro
         mech.check_values(problem.start_values(), count)
     except ProblemError as exc:
         raise ProblemError(f"{where}: {exc}") from None
+    return problem
+
+
+def _raw_variable(v: Variable):
+    """A design key as a problem file writes it."""
+    if v.value is not None:
+        return v.value
+    if v.choices is not None:
+        return {"choices": list(v.choices)}
+    out = {"lower": v.lower, "upper": v.upper}
+    if v.initial is not None:
+        out["initial"] = v.initial
+    return out
+
+
+def _checked_variant(r, problem: Problem) -> Problem:
+    """A variant made in code checked as a loaded file is: sections, the regulated scale and
+    the mechanism's own check of the start design."""
+    for section in problem.sections.values():
+        if hasattr(section, "check_problem"):
+            section.check_problem(problem)
+    _check_regulated_scale(r, problem)
+    try:
+        problem.model.check_values(problem.start_values(), problem.counts()[0])
+    except ProblemError as exc:
+        raise ProblemError(f"{problem.source}: {exc}") from None
     return problem
 
 

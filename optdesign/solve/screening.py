@@ -75,7 +75,7 @@ def screen(problem, count: int, n_designs: int, extra: list[dict] = (),
     if free:
         sobol = qmc.Sobol(d=len(free), scramble=True, seed=problem.solver.seed)
         m = max(1, int(math.ceil(math.log2(max(n_designs, 2)))))
-        rows += list(qmc.scale(sobol.random_base2(m)[:n_designs], lower, upper))
+        rows += list(spread(sobol.random_base2(m)[:n_designs], lower, upper))
     X = np.array(rows).reshape(len(rows), len(free))
     score, violation = _evaluate(problem, count, base, free, X, sampled)
     feasible = violation <= 0
@@ -92,6 +92,23 @@ def screen(problem, count: int, n_designs: int, extra: list[dict] = (),
         out.candidates.append(Candidate(base | dict(zip(free, X[i])), float(key[i]),
                                         bool(feasible[i]), unit[i]))
     out.seeds, out.radius = _basins(out.candidates, len(free))
+    return out
+
+
+#: a free length whose range spans at least this ratio (three decades) is sampled evenly in
+#: its logarithm: evenly in mm, nearly every design of a 1e-3..1e3 mm range would lie above
+#: 1 mm, and the basins at small lengths would go unseen
+LOG_SPAN = 1e3
+
+
+def spread(unit: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Points of the unit cube spread over the box: evenly where a range spans less than
+    :data:`LOG_SPAN`, evenly in the logarithm where it spans more (the NLP's own scaling,
+    by the geometric mean of the bounds, is logarithmic too)."""
+    out = qmc.scale(unit, lower, upper) if len(unit) else unit.reshape(0, len(lower))
+    wide = upper >= LOG_SPAN * lower
+    if np.any(wide) and len(unit):
+        out[:, wide] = lower[wide] * (upper[wide] / lower[wide]) ** unit[:, wide]
     return out
 
 

@@ -117,3 +117,19 @@ def test_bounds_of_six_decades_around_a_feasible_design_are_not_infeasible():
     result = solve_phase(replace(problem, design=problem.design | wide), 6)
     assert result.status == "optimal"
     assert result.delta < 0.1402049196            # the wider box holds a better design
+
+
+def test_a_range_of_decades_is_screened_evenly_in_its_logarithm():
+    """1e-3..1e3 mm: as many screened designs below 1 mm as above (evenly in mm, 99.9 % would
+    lie above); a range of less than three decades stays even in mm."""
+    import numpy as np
+    from scipy.stats import qmc
+
+    from optdesign.solve.screening import spread
+
+    unit = qmc.Sobol(d=2, scramble=True, seed=0).random_base2(10)
+    X = spread(unit, np.array([1e-3, 100.0]), np.array([1e3, 400.0]))
+    below = np.mean(X[:, 0] < 1.0)
+    assert 0.45 < below < 0.55
+    assert np.all((X[:, 0] >= 1e-3) & (X[:, 0] <= 1e3))
+    np.testing.assert_allclose(X[:, 1], 100.0 + 300.0 * unit[:, 1])

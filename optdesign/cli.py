@@ -54,6 +54,9 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     if argv is None:        # run as the `optdesign` program: it writes figures to files only
         os.environ.setdefault("MPLBACKEND", "Agg")
+        # a figure's layout warning is no line for the user's stderr: the figure is written
+        import warnings
+        warnings.filterwarnings("ignore", category=UserWarning, module="matplotlib")
     try:
         code = int(args.run(args))
         sys.stdout.flush()              # a closed pipe shows here, not at exit

@@ -28,7 +28,7 @@ _PR_SET_PDEATHSIG = 1
 
 def die_with_parent(parent_pid: int | None = None) -> None:
     """Make this (child) process end when ``parent_pid`` (default: its parent now) dies,
-    and at once on SIGTERM.
+    and at once on SIGTERM; it ignores SIGINT (its parent ends it).
 
     Usable as a ``ProcessPoolExecutor`` initializer: ``initializer=die_with_parent,
     initargs=(os.getpid(),)``.
@@ -36,6 +36,10 @@ def die_with_parent(parent_pid: int | None = None) -> None:
     parent_pid = parent_pid or os.getppid()
     try:        # not the parent's handler of :func:`exit_on_sigterm`: a worker just ends
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        # Ctrl-C reaches the whole process group: the parent unwinds and ends its workers;
+        # a worker interrupted itself would print multiprocessing's "Process ForkProcess-1:"
+        # and a traceback on stderr
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
     except ValueError:                         # not the main thread: nothing inherited there
         pass
     by_kernel = _kill_me_when_parent_dies()

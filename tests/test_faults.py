@@ -347,3 +347,22 @@ def test_the_next_run_undoes_or_completes_what_a_kill_left(tmp_path):
         pass
     assert {p.name: p.read_text() for p in out.iterdir()} == old_set | {"notes.txt": "mine"}
     assert _litter(out) == []
+
+
+def test_ctrl_c_during_parallel_polishes_is_one_line_and_no_worker_left(tmp_path):
+    """Ctrl-C reaches the whole process group: the workers ignore it and their parent ends
+    them, so stderr holds "optdesign: interrupted" alone (no "Process ForkProcess-1:", no
+    CasADi warning from an interrupted IPOPT) and no worker outlives the command."""
+    env = os.environ | {"PYTHONPATH": str(ROOT)}
+    proc = subprocess.Popen([sys.executable, "-m", "optdesign", "solve",
+                             str(ROOT / "problems" / "free_design.yaml"), "--out",
+                             str(tmp_path / "o"), "--no-plots"], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    time.sleep(2.0)                            # the first counts' basins are being polished
+    children = [c.pid for c in psutil.Process(proc.pid).children(recursive=True)]
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130
+    assert err.splitlines() == ["optdesign: interrupted"], err
+    assert _orphans(children) == []

@@ -395,10 +395,17 @@ def _in_parallel(problem, count: int, starts: list[dict]) -> list[tuple[Outcome,
 
     from ..lifetime import die_with_parent
 
-    with ProcessPoolExecutor(len(starts), mp_context=mp.get_context("fork"),
-                             initializer=die_with_parent, initargs=(os.getpid(),)) as pool:
+    pool = ProcessPoolExecutor(len(starts), mp_context=mp.get_context("fork"),
+                               initializer=die_with_parent, initargs=(os.getpid(),))
+    try:
         return list(pool.map(_polish_alone, [(problem, count, v, i > 0)
                                              for i, v in enumerate(starts)]))
+    except BaseException:       # Ctrl-C (the workers ignore it) or an error: end them now
+        for proc in list((getattr(pool, "_processes", None) or {}).values()):
+            proc.terminate()
+        raise
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _polish_alone(job) -> tuple[Outcome, Timings]:

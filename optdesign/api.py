@@ -145,8 +145,12 @@ def plot_mechanism(problem, design: Mapping | None = None, angles_deg=(0, 90, 18
 def plot_front(front, ax=None, title: str | None = None):
     """δ against ratio of a :class:`~optdesign.pareto.front.ParetoResult`: every phase
     count's front, the overall non-dominated designs and the knee; returns the figure."""
+    from .pareto.front import ParetoResult
     from .pareto.report import plot_fronts
 
+    if not isinstance(front, ParetoResult):
+        raise TypeError(f"plot_front takes what pareto() returns, a ParetoResult (got "
+                        f"{type(front).__name__})")
     points = front.points.copy()
     points.attrs["knee"] = front.indicators.get("knee")
     return plot_fronts(points, ax=ax, title=title, axis=front.axis)

@@ -43,6 +43,7 @@ import casadi as ca
 import numpy as np
 
 from .design import Design
+from .errors import ProblemError
 from .evaluation import Evaluation, evaluate, evaluate_problem
 from .exact import TOGGLE_STEP, TWO_PI, Curves, search_grid, stationary_angles, toggles
 
@@ -111,7 +112,7 @@ def sensitivities(problem, design_or_lengths, evaluation: Evaluation | None = No
         Design.from_problem(problem, dict(design_or_lengths))
     ev = evaluation or evaluate_problem(problem, design.values)
     if not ev.assembles:
-        raise ValueError(f"no sensitivities of a design that does not assemble: {ev.failure}")
+        raise ProblemError(f"no sensitivities of a design that does not assemble: {ev.failure}")
     lengths = design.model.lengths
     definition = problem.objective.ripple
     delta_kinks: list[str] = []

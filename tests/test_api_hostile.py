@@ -114,6 +114,24 @@ def test_pareto_checks_its_arguments_before_any_work(points, workers, resume):
         assert resume is False
 
 
+@FAST
+@given(design=DESIGNS)
+def test_sensitivities_take_a_design_by_the_same_rules(design):
+    out = _clean(lambda: api.sensitivities(PAPER, design))
+    if not isinstance(out, Exception):
+        assert all(not isinstance(v, bool) and math.isfinite(v) and v > 0
+                   for v in design.values())
+
+
+@settings(max_examples=30, deadline=None)
+@given(source=st.one_of(HOSTILE, st.dictionaries(st.text(max_size=4), HOSTILE, max_size=3)))
+def test_load_problem_solve_and_plot_front_refuse_what_they_cannot_take(source):
+    _clean(lambda: api.load_problem(source))
+    assert isinstance(_clean(lambda: api.solve(PAPER, progress=source)), Exception) or \
+        callable(source) or source is None
+    assert isinstance(_clean(lambda: api.plot_front(source)), Exception)
+
+
 def test_the_45_kinds_of_call_of_the_audit():
     """The calls the audit found wrong, each now a clear error naming the argument."""
     cases = [

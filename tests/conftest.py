@@ -24,6 +24,19 @@ def write_problem(tmp_path):
     return write
 
 
+def file_data(path, **changes) -> dict:
+    """A problem file's mapping with keys changed: ``name=...`` sets a top-level key,
+    ``section__key=...`` a key of a section."""
+    data = yaml.safe_load(Path(path).read_text())
+    for key, value in changes.items():
+        section, _, sub = key.partition("__")
+        if sub:
+            data.setdefault(section, {})[sub] = value
+        else:
+            data[key] = value
+    return data
+
+
 def base_problem(**changes):
     data = yaml.safe_load((ROOT / "problems" / "sharkov2022.yaml").read_text())
     data.update(changes)

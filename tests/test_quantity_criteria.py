@@ -8,7 +8,6 @@ import math
 
 import numpy as np
 import pytest
-import yaml
 
 from optdesign.criteria import objective_of, quantity_specs
 from optdesign.errors import ProblemError
@@ -16,20 +15,13 @@ from optdesign.evaluation import evaluate_problem
 from optdesign.problem import load_problem, problem_from_dict
 from optdesign.quantities import design_quantities
 from optdesign.solve import solve, verify
-from tests.conftest import ROOT
+from tests.conftest import ROOT, file_data
 
 HOUSING_FILE = ROOT / "problems" / "housing_disc.yaml"
 
 
 def _data(**changes):
-    data = yaml.safe_load(HOUSING_FILE.read_text())
-    for key, value in changes.items():
-        section, _, name = key.partition("__")
-        if name:
-            data.setdefault(section, {})[name] = value
-        else:
-            data[section] = value
-    return data
+    return file_data(HOUSING_FILE, **changes)
 
 
 # --------------------------------------------------------------------------- the file

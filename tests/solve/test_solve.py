@@ -8,20 +8,13 @@ import yaml
 from optdesign.cli import main
 from optdesign.problem import load_problem, problem_from_dict
 from optdesign.solve import solve, verify
-from tests.conftest import ROOT
+from tests.conftest import ROOT, file_data
 
 DISC = ROOT / "problems" / "sharkov2022_disc.yaml"
 
 
 def disc(**changes) -> dict:
-    data = yaml.safe_load(DISC.read_text())
-    for key, value in changes.items():
-        section, _, sub = key.partition("__")
-        if sub:
-            data.setdefault(section, {})[sub] = value
-        else:
-            data[key] = value
-    return data
+    return file_data(DISC, **changes)
 
 
 @pytest.fixture(scope="module")

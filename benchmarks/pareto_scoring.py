@@ -168,3 +168,26 @@ def thin(f: np.ndarray, k: int) -> np.ndarray:
         keep = np.delete(keep, worst)
         z = np.delete(z, worst, axis=0)
     return keep
+
+
+def beaten_optima(claims: list[dict], rel: float = 1e-6) -> int:
+    """How many points called ``optimal`` another verified design of their count beats on
+    their own ε-problem (less δ at a ratio of at least their ε; for the least-ripple end, less
+    δ at any ratio; for the largest-ratio end, a larger ratio), every figure the exact
+    verification's. The peers claim no ε-optimum:
+    their points are an archive, so the check is of ours."""
+    out = 0
+    for p in claims:
+        if p["status"] != "optimal":
+            continue
+        mine = [q for q in claims if q is not p and q["phases"] == p["phases"]]
+        less = [q for q in mine if q["delta"] < p["delta"] * (1 - rel)]
+        if p["kind"] == "least_ripple":
+            beaten = bool(less)
+        elif p["kind"] == "sweep" and p["epsilon"] is not None:
+            beaten = any(q["ratio"] >= p["epsilon"] * (1 - 1e-9) for q in less)
+        else:                       # the largest-ratio end: a larger ratio, or as much for less
+            beaten = any(q["ratio"] > p["ratio"] * (1 + rel) for q in mine) or \
+                any(q["ratio"] >= p["ratio"] * (1 - 1e-9) for q in less)
+        out += beaten
+    return out

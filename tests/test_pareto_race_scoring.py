@@ -80,3 +80,17 @@ def test_thinning_keeps_non_dominated_points_and_at_most_k():
     norm = scoring.Normalisation.of_fronts([f])
     assert norm.hypervolume(f[kept]) >= max(norm.hypervolume(f[[i, j]])
                                             for i in range(5) for j in range(i + 1, 5))
+
+
+def test_an_optimum_beaten_on_its_own_epsilon_is_counted():
+    def claim(status, kind, eps, delta, ratio, n=8):
+        return {"status": status, "kind": kind, "epsilon": eps, "phases": n,
+                "delta": delta, "ratio": ratio}
+    end = claim("optimal", "largest_ratio", None, 0.105223, 0.689)
+    claims = [claim("optimal", "least_ripple", 0.568, 0.1047, 0.568),
+              claim("optimal", "sweep", 0.60, 0.105245, 0.601),     # the end reaches 0.60
+              claim("local", "sweep", 0.61, 0.105400, 0.612),       # said to be local: fine
+              claim("optimal", "sweep", 0.59, 0.1051, 0.59),        # nothing beats it
+              claim("optimal", "sweep", 0.60, 0.2, 0.62, n=6),      # another count's problem
+              end]
+    assert scoring.beaten_optima(claims) == 1

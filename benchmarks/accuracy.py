@@ -23,9 +23,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from optdesign.accuracy import accuracy_rows, format_table, plot_accuracy  # noqa: E402
-from optdesign.io import atomic_savefig, atomic_write_json, atomic_write_text  # noqa: E402
-from optdesign.problem import load_problem  # noqa: E402
+from optdesign.analyses.accuracy import accuracy_rows, format_table, plot_accuracy  # noqa: E402
+from optdesign.outputs.atomic import atomic_savefig, atomic_write_json, atomic_write_text  # noqa: E402
+from optdesign.problem.loader import load_problem  # noqa: E402
 
 RESULTS = ROOT / "benchmarks" / "results"
 #: the rows the pages show of each evaluator, (method, N, ρ); every row is in accuracy.json
@@ -151,7 +151,7 @@ def main() -> int:
     rows, ref = accuracy_rows(paper, crosscheck_samples=cross, solve_problem=disc)
     print(format_table(rows, ref))
     optimum = next(r for r in rows if r["method"] == "solve" and r["verified"])
-    from optdesign.solve import solve
+    from optdesign.solver import solve
     best = solve(disc)           # the default settings' optimum: evaluate the evaluators there
     rows_opt, ref_opt = accuracy_rows(disc, values=best.design, crosscheck_samples=cross)
     print(f"\nat the optimum of {disc.name} (default settings, δ = {best.delta:.6f}):")

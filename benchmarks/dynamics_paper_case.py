@@ -88,7 +88,7 @@ def report(runs: dict) -> str:
 
 
 def main() -> int:
-    from optdesign.io import atomic_write_json, atomic_write_text
+    from optdesign.outputs.atomic import atomic_write_json, atomic_write_text
 
     runs = {name: run(flags) for name, flags in RUNS.items()}
     meta = {"python": sys.version.split()[0], "time": time.strftime("%Y-%m-%d %H:%M:%S"),

@@ -54,7 +54,7 @@ RESULTS = ROOT / "benchmarks" / "results"
 
 # ------------------------------------------------------------------ methods
 def problem(stiffness: float, inertia: float, damping: float, turns: int):
-    from optdesign.problem import problem_from_dict
+    from optdesign.problem.loader import problem_from_dict
 
     data = yaml.safe_load((ROOT / "problems" / "sharkov2022.yaml").read_text())
     data["dynamics"] = dict(I1=0.014, I2=inertia, stiffness=stiffness, damping_ratio=damping,
@@ -76,7 +76,7 @@ def compare_methods(args) -> None:
     benchmarks/results/NAME.{md,json} (NAME from ``--name``): table 1 every row, table 2 the
     README's columns (Radau against RK45)."""
     from optdesign.dynamics.steady import simulate
-    from optdesign.io import atomic_write_json, atomic_write_text
+    from optdesign.outputs.atomic import atomic_write_json, atomic_write_text
 
     conditions = (f"four-bar converter, I2 = {args.inertia:g} kg·m², damping ratio "
                   f"{args.damping:g}, {args.turns} turns from the same start, rtol 1e-8, "
@@ -189,7 +189,7 @@ def sweep(args) -> None:
                   f"{row['stiffness']:7.0e} ζ={row['damping_ratio']:<4g} exit {row['exit']} "
                   f"{row.get('status')!s:10} {row['wall_s']:7.1f} s "
                   f"{'' if row['passed'] else 'FAILED'}", flush=True)
-    from optdesign.io import atomic_write_json, atomic_write_text
+    from optdesign.outputs.atomic import atomic_write_json, atomic_write_text
 
     name = "dynamics_stiffness_quick" if args.quick else "dynamics_stiffness"
     rows = _merged(RESULTS / f"{name}.json", rows, stiffnesses)

@@ -18,8 +18,8 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from optdesign.problem import problem_from_dict  # noqa: E402
-from optdesign.solve import solve  # noqa: E402
+from optdesign.problem.loader import problem_from_dict  # noqa: E402
+from optdesign.solver import solve  # noqa: E402
 
 
 def variants():

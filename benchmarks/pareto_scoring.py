@@ -1,6 +1,6 @@
 """How benchmarks/pareto_vs_peers.py scores fronts: pure functions of (δ, ratio) points.
 
-Both objectives are minimised, f = (δ, −ratio), as in `optdesign.pareto.indicators`. One
+Both objectives are minimised, f = (δ, −ratio), as in `optdesign.fronts.indicators`. One
 normalisation per problem, z = (f − ideal)/(nadir − ideal), with the ideal and nadir of the
 non-dominated union of every method's verified final front (a zero span counts as 1), and one
 reference point z_ref = (1.1, 1.1), so every method's hypervolume is on the same scale (at most

@@ -36,7 +36,7 @@ min(--budget-factor · T_ours, --cap) seconds, on one core:
   is never held to fewer than we show) by dropping the least hypervolume contributor one at
   a time (exact verification costs ~10-30 ms a design).
 
-Scoring. Every point of every method is re-verified EXACTLY (``optdesign.solve.verify``, the
+Scoring. Every point of every method is re-verified EXACTLY (``optdesign.solver.verify``, the
 evaluator and tolerances of ``optdesign pareto``); a peer's point that fails there is dropped
 and counted. One normalisation per problem: ideal and nadir of the non-dominated union of every
 method's verified final front, reference point (1.1, 1.1) in normalised (δ, −ratio), so the
@@ -94,10 +94,10 @@ from pareto_scoring import (Normalisation, beaten_optima, checkpoint_times,  # n
 from solve_vs_peers import DesignerModel, validate  # noqa: E402
 
 from optdesign.errors import OptDesignError  # noqa: E402
-from optdesign.io import atomic_write_text  # noqa: E402
-from optdesign.outputs import save_figure  # noqa: E402
-from optdesign.pareto.refine import MAX_ROUNDS  # noqa: E402
-from optdesign.problem import load_problem  # noqa: E402
+from optdesign.outputs.atomic import atomic_write_text  # noqa: E402
+from optdesign.commands.files import save_figure  # noqa: E402
+from optdesign.fronts.refine import MAX_ROUNDS  # noqa: E402
+from optdesign.problem.loader import load_problem  # noqa: E402
 
 CASES = {"pareto_fourbar": "pareto_fourbar.yaml",
          "pareto_disc_three_counts": "pareto_disc_three_counts.yaml",
@@ -117,7 +117,7 @@ _PROBLEM = None        # the problem of the verifying processes (set before they
 
 
 def _verify_one(values: dict) -> dict:
-    from optdesign.solve import verify
+    from optdesign.solver import verify
 
     try:
         v = verify(_PROBLEM, values)
@@ -128,7 +128,7 @@ def _verify_one(values: dict) -> dict:
 
 
 class Verifier:
-    """Exact figures of designs (``optdesign.solve.verify``), each design verified once, on
+    """Exact figures of designs (``optdesign.solver.verify``), each design verified once, on
     ``workers`` processes (the cores are idle then: ours and the peers have finished)."""
 
     def __init__(self, problem, model: DesignerModel, workers: int = 2):
@@ -634,7 +634,7 @@ def main(argv=None) -> int:
     log = lambda s: print(s, file=sys.stderr, flush=True)  # noqa: E731
     t0 = time.perf_counter()
     results = [race(case, args, log) for case in cases]
-    header = (f"Every point of every method verified exactly (`optdesign.solve.verify`); peers "
+    header = (f"Every point of every method verified exactly (`optdesign.solver.verify`); peers "
               f"on the designer's NumPy model ({args.samples} samples, refined), population "
               f"{POP_SIZE}, seed {args.seed}, budget min({args.budget_factor:g}·T_ours, "
               f"{args.cap:g} s); a peer's archive thinned at each checkpoint to as many designs "

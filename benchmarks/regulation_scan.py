@@ -2,7 +2,7 @@
 
 The design (problems/sharkov2022_disc.yaml's box, n = 6, l0 = 268.48, l1 = 20, l2 = 279.2,
 l2_prime = 261.78, l3 = 80.67 mm) has its largest δ strictly inside e in [0.2, 1]. Each of
-10 000 equally spaced e is evaluated by the exact evaluator (``optdesign.regulation``'s
+10 000 equally spaced e is evaluated by the exact evaluator (``optdesign.evaluation.regulation``'s
 per-eccentricity figures); the scan's largest δ and its e are stored in
 benchmarks/results/regulation_scan.json, against which tests/solve/test_regulation_interval.py
 checks ``worst_over_range`` (within 1e-6) without repeating the scan (about 4 minutes).
@@ -22,10 +22,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from optdesign.design import Design  # noqa: E402
-from optdesign.io import atomic_write_text  # noqa: E402
-from optdesign.problem import load_problem  # noqa: E402
-from optdesign.regulation import _AtEccentricity, worst_over_range  # noqa: E402
+from optdesign.evaluation.design import Design  # noqa: E402
+from optdesign.outputs.atomic import atomic_write_text  # noqa: E402
+from optdesign.problem.loader import load_problem  # noqa: E402
+from optdesign.evaluation.regulation import _AtEccentricity, worst_over_range  # noqa: E402
 
 PROBLEM = ROOT / "problems" / "sharkov2022_disc.yaml"
 DESIGN = {"l0": 268.48, "l1": 20.0, "l2": 279.2, "l2_prime": 261.78, "l3": 80.67, "phases": 6}

@@ -31,8 +31,8 @@ import warnings
 
 import numpy as np
 
-from optdesign.design import Design
-from optdesign.exact import exact_figures
+from optdesign.evaluation.design import Design
+from optdesign.envelope.exact import exact_figures
 
 L0, L1, L2, L2P, L3, N, W1 = 225.0, 20.0, 225.0, 100.0, 56.0, 6, 97.0
 TAU = 2 * np.pi / N

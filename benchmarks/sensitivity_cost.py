@@ -1,4 +1,4 @@
-"""Cost of the exact sensitivities of a design (optdesign.sensitivity) beside its verification.
+"""Cost of the exact sensitivities of a design (optdesign.evaluation.sensitivity) beside its verification.
 
 For the disc problem's optimum (n = 6, one eccentricity) and the paper's design of
 problems/sharkov2022.yaml at n = 6, 12 and 24 (three eccentricities): the median wall time of
@@ -21,10 +21,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from optdesign.evaluation import evaluate_problem  # noqa: E402
-from optdesign.problem import load_problem  # noqa: E402
-from optdesign.sensitivity import sensitivities  # noqa: E402
-from optdesign.solve.verify import verify  # noqa: E402
+from optdesign.evaluation.figures import evaluate_problem  # noqa: E402
+from optdesign.problem.loader import load_problem  # noqa: E402
+from optdesign.evaluation.sensitivity import sensitivities  # noqa: E402
+from optdesign.solver.verify import verify  # noqa: E402
 
 #: the disc problem's optimum (tests/solve/test_regression_optima.py pins its δ)
 DISC_OPTIMUM = {"l0": 399.97641497248475, "l1": 20.0, "l2": 399.99999997792696,

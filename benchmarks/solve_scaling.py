@@ -6,7 +6,7 @@ Every solve runs in a fresh process (cold CasADi caches; the clock runs around
 ``solve(problem)`` alone, not the imports), one after the other. The ratio floor is the
 file's 0.344; where a phase count is infeasible with it, the solve is repeated with 0.2 and
 the table says so. Reported per run: status, exact δ (the result's, re-checked by
-``optdesign.solve.verify``), ratio, IPOPT iterations, starts, wall time, and, when the
+``optdesign.solver.verify``), ratio, IPOPT iterations, starts, wall time, and, when the
 SolveResult carries ``timings_s`` (stage -> seconds: build, screening, ipopt, verification),
 one column per stage.
 
@@ -30,9 +30,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from optdesign.io import atomic_write_text  # noqa: E402
-from optdesign.outputs import save_figure  # noqa: E402
-from optdesign.problem import Variable, load_problem  # noqa: E402
+from optdesign.outputs.atomic import atomic_write_text  # noqa: E402
+from optdesign.commands.files import save_figure  # noqa: E402
+from optdesign.problem.loader import Variable, load_problem  # noqa: E402
 from solve_vs_peers import timed_solve  # noqa: E402  (beside this script)
 
 PROBLEM = ROOT / "problems" / "sharkov2022_disc.yaml"
@@ -56,7 +56,7 @@ def make_problem(phases: int, samples: int | None, min_ratio: float | None):
 
 def child(spec: str) -> None:
     """In a fresh process: one timed solve, then the exact re-check; JSON on stdout."""
-    from optdesign.solve import verify
+    from optdesign.solver import verify
 
     phases, samples, min_ratio = json.loads(spec)
     problem = make_problem(phases, samples, min_ratio)

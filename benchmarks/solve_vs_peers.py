@@ -1,6 +1,6 @@
 """`optdesign solve` against the optimisers a designer would write himself, on wall time.
 
-The race. For every problem, ours first: `optdesign.solve.solve(problem)` in a fresh process
+The race. For every problem, ours first: `optdesign.solver.solve(problem)` in a fresh process
 (cold CasADi caches, no import time: the clock runs around the call alone), giving T_ours and
 our exact δ. Then three peers, each for a wall-time budget of max(10·T_ours, --floor) seconds,
 capped at --cap, on a model a competent designer writes in an afternoon:
@@ -47,7 +47,7 @@ capped at --cap, on a model a competent designer writes in an afternoon:
   model; stopped by `TimeBasedTermination`.
 * **Scoring.** Every improvement of a peer's best-so-far (by its penalised F) is recorded with
   its wall time. Afterwards the recorded bests, thinned to ~80 log-spaced time bins, are
-  re-evaluated EXACTLY by `optdesign.solve.verify` (same exact evaluator and tolerances as
+  re-evaluated EXACTLY by `optdesign.solver.verify` (same exact evaluator and tolerances as
   ours); the bin in which a peer first meets the target is re-checked record by record. For
   each peer the table gives the time at which its best-so-far is first exactly feasible with
   δ ≤ δ_ours·(1 + 1e-3), "never" if not within its budget, and the best exact feasible δ
@@ -85,9 +85,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from optdesign.io import atomic_write_text  # noqa: E402
-from optdesign.outputs import save_figure  # noqa: E402
-from optdesign.problem import Variable, load_problem  # noqa: E402
+from optdesign.outputs.atomic import atomic_write_text  # noqa: E402
+from optdesign.commands.files import save_figure  # noqa: E402
+from optdesign.problem.loader import Variable, load_problem  # noqa: E402
 
 # --------------------------------------------------------------------------- problems
 #: name -> (file, phase count replacing the file's, min_ratio replacing the file's)
@@ -250,7 +250,7 @@ class DesignerModel:
     phase counts."""
 
     def __init__(self, problem, samples: int = 360, refine: bool = True):
-        from optdesign.solve.verify import eccentricities_of
+        from optdesign.solver.verify import eccentricities_of
 
         self.problem = problem
         mech = problem.model
@@ -359,7 +359,7 @@ class DesignerModel:
 def validate(problem, trials: int = 40, seed: int = 0) -> float:
     """Largest |NumPy − CasADi| of dθ/dφ and cos μ over random assembling designs, every
     admissible count and eccentricity (our model: `Design.sample`)."""
-    from optdesign.design import Design
+    from optdesign.evaluation.design import Design
 
     model = DesignerModel(problem)
     rng = np.random.default_rng(seed)
@@ -506,7 +506,7 @@ RUNNERS = {"DE (scipy)": run_de, "CMA-ES (cma)": run_cma, "GA (pymoo)": run_ga}
 
 # --------------------------------------------------------------------------- exact scoring
 def _verify(problem, model: DesignerModel, rec: dict) -> dict:
-    from optdesign.solve import verify
+    from optdesign.solver import verify
 
     v = verify(problem, model.values(rec["x"], rec["idx"]))
     return {"t": rec["t"], "F": rec["F"], "sampled_delta": rec["sampled_delta"],
@@ -562,7 +562,7 @@ def cpu_seconds() -> float:
 
 def timed_solve(problem):
     """Our solve, timed around the call alone (wall and CPU): (result, summary dict)."""
-    from optdesign.solve import solve
+    from optdesign.solver import solve
 
     cpu0 = cpu_seconds()
     t0 = time.perf_counter()
@@ -578,11 +578,11 @@ def timed_solve(problem):
 
 
 def one_check_seconds(problem, design: dict, repeats: int = 5) -> float:
-    """Wall time of one exact check (`optdesign.solve.verify`) of ``design``, warm (its CasADi
+    """Wall time of one exact check (`optdesign.solver.verify`) of ``design``, warm (its CasADi
     functions built) but with the evaluator's cache emptied: the least any solve that returns
     an exactly verified answer spends after its search. The best of ``repeats``."""
-    from optdesign import evaluation
-    from optdesign.solve import verify
+    from optdesign.evaluation import figures as evaluation
+    from optdesign.solver import verify
 
     best = math.inf
     for _ in range(repeats):
@@ -772,7 +772,7 @@ def race(case: str, args, log) -> dict:
     t_ours = ours["time_s"]
     log(f"[{case}] ours: {ours['status']} δ = {ours['delta']} in {t_ours:.2f} s "
         f"(CPU {ours['cpu_s']:.2f} s)")
-    from optdesign.solve import verify
+    from optdesign.solver import verify
     if ours["design"] is not None:
         v = verify(problem, ours["design"])
         ours["verified"] = {"feasible": v.feasible, "delta": v.delta}
@@ -849,7 +849,7 @@ def main(argv=None) -> int:
     results = [race(case, args, log) for case in cases]
     md = table(results) + "\n\n" + verdicts(results) + "\n\n" + what_ten_times_takes(results)
     resid = max(r["validation_residual"] for r in results)
-    header = (f"Exact δ (`optdesign.solve.verify`) of every answer; peers on the designer's "
+    header = (f"Exact δ (`optdesign.solver.verify`) of every answer; peers on the designer's "
               f"NumPy model ({args.peer_model}, {args.samples} samples; max |NumPy − CasADi| "
               f"of the speeds {resid:.1e}), seed {args.seed}, budget max({args.factor:g}·T_ours, "
               f"{args.floor:g} s) capped at {args.cap:g} s; target: exact feasible δ ≤ "

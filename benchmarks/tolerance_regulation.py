@@ -33,11 +33,11 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from optdesign.design import Design  # noqa: E402
-from optdesign.io import atomic_savefig, atomic_write_json, atomic_write_text  # noqa: E402
-from optdesign.problem import load_problem, problem_from_dict  # noqa: E402
-from optdesign.regulation import curve_over_range, worst_over_range  # noqa: E402
-from optdesign.solve import solve  # noqa: E402
+from optdesign.evaluation.design import Design  # noqa: E402
+from optdesign.outputs.atomic import atomic_savefig, atomic_write_json, atomic_write_text  # noqa: E402
+from optdesign.problem.loader import load_problem, problem_from_dict  # noqa: E402
+from optdesign.evaluation.regulation import curve_over_range, worst_over_range  # noqa: E402
+from optdesign.solver import solve  # noqa: E402
 from optdesign.tolerance.montecarlo import monte_carlo  # noqa: E402
 from optdesign.tolerance.worst_case import worst_case  # noqa: E402
 
@@ -118,7 +118,7 @@ def report(rows: list[dict]) -> str:
 
 
 def figures(rows: list[dict]) -> None:
-    from optdesign.plots import pyplot
+    from optdesign.figures.design import pyplot
 
     plt = pyplot()
     by = {r["name"]: r for r in rows}

@@ -14,9 +14,6 @@ __all__ = ["__version__", "analyze", "load_problem", "pareto", "plot_front", "pl
 
 
 def __getattr__(name: str):
-    if name in ("load_problem", "analyze", "as_problem", "plot_front", "plot_mechanism",
-                "plot_speeds", "sensitivities"):
-        return getattr(import_module(".api", __name__), name)
-    if name in ("solve", "pareto"):            # the packages, callable as the API's functions
-        return import_module(f".{name}", __name__)
+    if name in __all__ and name != "__version__" or name == "as_problem":
+        return getattr(import_module("optdesign.api"), name)
     raise AttributeError(f"module 'optdesign' has no attribute {name!r}")

@@ -8,7 +8,7 @@
     front = pareto(problem, points=8)    # ParetoResult: .front, .knee, .to_frame()
     analyze(problem, result.design)      # AnalysisResult: the exact figures of one design
 
-Every function takes a problem as a :class:`~optdesign.problem.Problem`, a path to a problem
+Every function takes a problem as a :class:`~optdesign.problem.loader.Problem`, a path to a problem
 file, or a mapping with the file's keys (validated by the same loader: a bad key raises
 :class:`~optdesign.errors.ProblemError` naming it). Nothing here selects a matplotlib backend
 or writes a file unless asked to (``pareto(out=...)``). docs/api.md has the whole reference.
@@ -19,9 +19,9 @@ import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 
-from .errors import ProblemError, shown
-from .problem import Problem, Reader, problem_from_dict
-from .problem import load_problem as _load_file
+from optdesign.errors import ProblemError, shown
+from optdesign.problem.loader import Problem, Reader, problem_from_dict
+from optdesign.problem.loader import load_problem as _load_file
 
 __all__ = ["analyze", "as_problem", "load_problem", "pareto", "plot_front", "plot_mechanism",
            "plot_speeds", "sensitivities", "solve"]
@@ -48,15 +48,15 @@ def _design(problem: Problem, design) -> dict | None:
 
 def _eccentricity(problem: Problem, e) -> float:
     """An eccentricity fraction in (0, 1], as ``regulation.eccentricity`` takes it."""
-    from .problem import _read_regulation
+    from optdesign.problem.loader import _read_regulation
     return _read_regulation(Reader(f"{problem.source}: argument"), {"eccentricity": [e]})[0][0]
 
 
 def analyze(problem, design: Mapping | None = None):
     """Exact figures of the problem's own design, or of ``design`` (lengths and count; the
     keys a :class:`SolveResult` ``.design`` has). Returns an
-    :class:`~optdesign.analysis.AnalysisResult`."""
-    from .analysis import analyze as _analyze
+    :class:`~optdesign.analyses.analyze.AnalysisResult`."""
+    from optdesign.analyses.analyze import analyze as _analyze
 
     problem = load_problem(problem)
     return _analyze(problem, _design(problem, design))
@@ -65,9 +65,9 @@ def analyze(problem, design: Mapping | None = None):
 def sensitivities(problem, design: Mapping | None = None):
     """Exact dδ/dl, d(ratio)/dl and d(transmission-angle margin)/dl for every length of the
     problem's own design, or of ``design``: a
-    :class:`~optdesign.sensitivity.Sensitivities` (``.to_dict()`` is the block of
+    :class:`~optdesign.evaluation.sensitivity.Sensitivities` (``.to_dict()`` is the block of
     ``result.json``; a :class:`SolveResult` has its best design's as ``.sensitivities``)."""
-    from .sensitivity import sensitivities as _sensitivities
+    from optdesign.evaluation.sensitivity import sensitivities as _sensitivities
 
     problem = load_problem(problem)
     return _sensitivities(problem, problem.start_values() | (_design(problem, design) or {}))
@@ -75,8 +75,8 @@ def sensitivities(problem, design: Mapping | None = None):
 
 def solve(problem, progress=None):
     """The best verified design over every admissible phase count
-    (:func:`optdesign.solve.driver.solve`). ``progress``: called once per phase count."""
-    from .solve.driver import solve as _solve
+    (:func:`optdesign.solver.driver.solve`). ``progress``: called once per phase count."""
+    from optdesign.solver.driver import solve as _solve
 
     if progress is not None and not callable(progress):
         raise TypeError(f"progress must be a callable or None (got {type(progress).__name__})")
@@ -85,13 +85,13 @@ def solve(problem, progress=None):
 
 def pareto(problem, out=None, points: int | None = None, workers: int | None = 1,
            resume: bool = False, scheduler=None, progress: bool = False):
-    """The front of ripple against ratio (:func:`optdesign.pareto.sweep.sweep`).
+    """The front of ripple against ratio (:func:`optdesign.fronts.sweep.sweep`).
 
     ``out``: folder for the journal and pareto.csv/json (what ``--resume`` continues); by
     default a temporary folder, removed afterwards (the result is in memory). ``workers``: 1
     (default) solves in this process, None every core."""
-    from .pareto.section import DECLARATION
-    from .pareto.sweep import sweep
+    from optdesign.fronts.section import DECLARATION
+    from optdesign.fronts.sweep import sweep
 
     problem = load_problem(problem)
     r = Reader(f"{problem.source}: argument")
@@ -118,8 +118,8 @@ def plot_speeds(problem, design: Mapping | None = None, eccentricity: float = 1.
                 title: str | None = None):
     """Each rocker's driving speed and the output envelope over one crank turn, of the
     problem's own design or of ``design``; returns the matplotlib figure."""
-    from .design import Design
-    from .plots import plot_speeds as _plot
+    from optdesign.evaluation.design import Design
+    from optdesign.figures.design import plot_speeds as _plot
 
     problem = load_problem(problem)
     return _plot(Design.from_problem(problem, _design(problem, design)), problem.stroke,
@@ -129,8 +129,8 @@ def plot_speeds(problem, design: Mapping | None = None, eccentricity: float = 1.
 def plot_mechanism(problem, design: Mapping | None = None, angles_deg=(0, 90, 180, 270),
                    eccentricity: float = 1.0, title: str | None = None):
     """The linkage drawn to scale at a few crank angles; returns the matplotlib figure."""
-    from .design import Design
-    from .plots import plot_mechanism as _plot
+    from optdesign.evaluation.design import Design
+    from optdesign.figures.design import plot_mechanism as _plot
 
     problem = load_problem(problem)
     r = Reader(f"{problem.source}: argument")
@@ -143,10 +143,10 @@ def plot_mechanism(problem, design: Mapping | None = None, angles_deg=(0, 90, 18
 
 
 def plot_front(front, ax=None, title: str | None = None):
-    """δ against ratio of a :class:`~optdesign.pareto.front.ParetoResult`: every phase
+    """δ against ratio of a :class:`~optdesign.fronts.front.ParetoResult`: every phase
     count's front, the overall non-dominated designs and the knee; returns the figure."""
-    from .pareto.front import ParetoResult
-    from .pareto.report import plot_fronts
+    from optdesign.fronts.front import ParetoResult
+    from optdesign.fronts.report import plot_fronts
 
     if not isinstance(front, ParetoResult):
         raise TypeError(f"plot_front takes what pareto() returns, a ParetoResult (got "

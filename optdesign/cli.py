@@ -12,7 +12,7 @@ import os
 import sys
 from importlib import import_module
 
-from .errors import OptDesignError, ProblemError, UsageError, shown
+from optdesign.errors import OptDesignError, ProblemError, UsageError, shown
 
 #: longest line the command writes on stderr
 MAX_MESSAGE_CHARS = 1000
@@ -38,7 +38,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import __version__
+    from optdesign import __version__
 
     parser = _Parser(prog="optdesign", description="Size the linkages of pulse CVTs.")
     parser.add_argument("--version", action="version", version=f"optdesign {__version__}")

@@ -1,11 +1,11 @@
 """Declarations of a problem file's keys: type, default, unit, range and meaning, written once.
 
 A :class:`Key` is read by the loader (:meth:`Key.read` checks a value against it, with the
-loader's :class:`~optdesign.problem.Reader` naming the file and key path) and by the generated
-reference (:mod:`optdesign.reference`: docs/problem-file.md, ``optdesign schema``,
+loader's :class:`~optdesign.problem.loader.Reader` naming the file and key path) and by the generated
+reference (:mod:`optdesign.problem.reference`: docs/problem-file.md, ``optdesign schema``,
 ``optdesign init``), so the documentation cannot say a default or a range that the loader does
 not apply. This module knows nothing of any particular key: the tables live beside the code
-that reads them (``optdesign/problem.py`` and each section's module).
+that reads them (``optdesign/problem/loader.py`` and each section's module).
 """
 from __future__ import annotations
 

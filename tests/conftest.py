@@ -10,7 +10,7 @@ PAPER = dict(l0=225.0, l1=20.0, l2=225.0, l2_prime=100.0, l3=56.0, phases=6)
 
 @pytest.fixture
 def paper_design():
-    from optdesign.design import Design
+    from optdesign.evaluation.design import Design
     return Design("fourbar_converter", dict(PAPER))
 
 

@@ -3,11 +3,11 @@ import json
 
 import pytest
 
-from optdesign.accuracy import lse_figures, reference_figures
-from optdesign.solve.accuracy import solve_accuracy
+from optdesign.analyses.accuracy import lse_figures, reference_figures
+from optdesign.solver.accuracy import solve_accuracy
 from optdesign.cli import main
-from optdesign.design import Design
-from optdesign.problem import load_problem
+from optdesign.evaluation.design import Design
+from optdesign.problem.loader import load_problem
 from tests.conftest import PAPER, ROOT
 
 
@@ -42,7 +42,7 @@ def test_plain_log_sum_exp_is_worse_than_the_surrogate():
 
 def test_solve_result_reports_accuracy():
     p = load_problem(ROOT / "problems" / "sharkov2022.yaml")
-    from optdesign.solve import solve
+    from optdesign.solver import solve
     r = solve(p)
     acc = r.accuracy
     for key in ("verification", "nlp_samples", "nlp_smoothing",

@@ -11,10 +11,18 @@ LEVER = ROOT / "problems" / "vergov_solve.yaml"
 
 def test_the_four_functions_import_from_the_package():
     from optdesign import analyze, load_problem, pareto, solve
-    import optdesign.solve.driver as driver           # the packages' modules stay reachable
+    import optdesign.solver.driver as driver           # the packages' modules stay reachable
 
     assert callable(solve) and callable(pareto) and callable(analyze)
     assert driver.solve_phase is not None
+    import inspect
+
+    import optdesign
+    import optdesign.api as api
+    import optdesign.fronts.sweep  # noqa: F401  (an engine's module imported does not shadow the API)
+    assert optdesign.solve is api.solve and optdesign.pareto is api.pareto
+    assert list(inspect.signature(solve).parameters)[0] == "problem"
+    assert inspect.isfunction(solve) and inspect.isfunction(pareto)
     assert load_problem(DISC).name == "sharkov2022_disc"
 
 
@@ -58,7 +66,7 @@ def test_analyze_checks_the_problem_files_constraints():
     bad = analyze(problem, {"l3": 30.0})
     angle = next(c for c in bad.constraints if c["name"] == "transmission_angle")
     assert not angle["satisfied"] and angle["margin"] < 0
-    assert "VIOLATED" in __import__("optdesign.analysis", fromlist=["x"]).format_analysis(bad)
+    assert "VIOLATED" in __import__("optdesign.analyses.analyze", fromlist=["x"]).format_analysis(bad)
     rows = bad.to_frame()
     assert set(rows["stroke"]) == {"forward", "reverse"} and "delta" in rows
 

@@ -103,7 +103,7 @@ def test_pareto_checks_its_arguments_before_any_work(points, workers, resume):
     from unittest import mock
 
     ran = []
-    with mock.patch("optdesign.pareto.sweep.sweep",
+    with mock.patch("optdesign.fronts.sweep.sweep",
                     lambda *a, **k: ran.append(k) or "ran"):
         out = _clean(lambda: api.pareto(FRONT, points=points, workers=workers,
                                         resume=resume))

@@ -9,12 +9,12 @@ import casadi as ca
 import pytest
 import yaml
 
-from optdesign.analysis import analyze
-from optdesign.criteria import OBJECTIVES, LengthConstraint, Objective
+from optdesign.analyses.analyze import analyze
+from optdesign.quantities.criteria import OBJECTIVES, LengthConstraint, Objective
 from optdesign.errors import ProblemError
 from optdesign.mechanisms import REGISTRY, Mechanism, VariableSpec, get_mechanism
-from optdesign.problem import SECTION_PARSERS, load_problem, problem_from_dict
-from optdesign.solve import solve, verify
+from optdesign.problem.loader import SECTION_PARSERS, load_problem, problem_from_dict
+from optdesign.solver import solve, verify
 from tests.conftest import ROOT
 
 PACKAGE = ROOT / "optdesign"
@@ -25,8 +25,10 @@ def _module(path: Path) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def _imports(path: Path) -> set[str]:
-    """Every optdesign module ``path`` imports, at the top or inside a function."""
+def _imports(path: Path, modules) -> set[str]:
+    """Every optdesign module ``path`` imports: at the top or inside a function, by
+    ``import_module`` of a literal name, of an f-string's literal prefix (every module under
+    it), or by a registry's ``"module"`` or ``"module:Class"`` string."""
     here = _module(path).split(".")
     package = here if path.name == "__init__.py" else here[:-1]
     out = set()
@@ -35,20 +37,110 @@ def _imports(path: Path) -> set[str]:
             base = package[:len(package) - node.level + 1] if node.level else []
             target = ".".join(base + (node.module.split(".") if node.module else []))
             if node.level or target.startswith("optdesign"):
-                out.add(target)
-                out.update(f"{target}.{a.name}" for a in node.names)
+                named = {f"{target}.{a.name}" for a in node.names}
+                out.update(named & set(modules) or {target})
         elif isinstance(node, ast.Import):
             out.update(a.name for a in node.names if a.name.startswith("optdesign"))
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str) \
+                and "." in node.value and node.value.split(":")[0] in modules:
+            out.add(node.value.split(":")[0])            # a registry's "module" or "module:Class"
+        elif isinstance(node, ast.Call) and getattr(node.func, "id",
+                                                     getattr(node.func, "attr", "")) == "import_module":
+            arg = node.args[0] if node.args else None
+            if isinstance(arg, ast.Constant) and str(arg.value).startswith("optdesign"):
+                out.add(arg.value)
+            elif isinstance(arg, ast.JoinedStr) and isinstance(arg.values[0], ast.Constant):
+                prefix = arg.values[0].value
+                assert prefix.startswith("optdesign."), f"{path}: import_module({prefix!r}...)"
+                out.update(m for m in modules if m.startswith(prefix))
     return out
 
 
-def test_no_module_imports_a_module_that_imports_it_back():
+def _graph() -> dict[str, set[str]]:
     modules = {_module(p): p for p in PACKAGE.rglob("*.py")}
-    graph = {m: {t for t in _imports(p) if t in modules and t != m} for m, p in modules.items()}
-    cycles = sorted((a, b) for a in graph for b in graph[a]
-                    if a in graph.get(b, ()) and a < b and not b.startswith(a + ".")
-                    and not a.startswith(b + "."))
-    assert cycles == []
+    return {m: {t for t in _imports(p, modules) if t in modules and t != m}
+            for m, p in modules.items()}
+
+
+def _strongly_connected(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Tarjan's components of more than one node (iterative: no recursion limit)."""
+    index, low, on_stack, stack, found = {}, {}, set(), [], []
+    for root in graph:
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, children = work[-1]
+            child = next(children, None)
+            if child is not None:
+                if child not in index:
+                    index[child] = low[child] = len(index)
+                    stack.append(child)
+                    on_stack.add(child)
+                    work.append((child, iter(sorted(graph.get(child, ())))))
+                elif child in on_stack:
+                    low[node] = min(low[node], index[child])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[node])
+            if low[node] == index[node]:
+                component = []
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.append(member)
+                    if member == node:
+                        break
+                if len(component) > 1:
+                    found.append(sorted(component))
+    return found
+
+
+def _packages_at(graph: dict[str, set[str]], depth: int) -> dict[str, set[str]]:
+    """The import graph between the packages ``depth`` levels under optdesign: an edge where
+    any module of one imports any module of the other (a package's own modules, and the
+    root's lazy door ``optdesign.__init__``, aside)."""
+    def group(module):
+        return ".".join(module.split(".")[:depth + 1])
+
+    out: dict[str, set[str]] = {}
+    for module, targets in graph.items():
+        if module.count(".") < depth:
+            continue
+        out.setdefault(group(module), set()).update(
+            group(t) for t in targets if t.count(".") >= depth and group(t) != group(module))
+    return out
+
+
+def test_no_circle_among_modules():
+    assert _strongly_connected(_graph()) == []
+
+
+def test_no_circle_among_packages_at_any_depth():
+    graph = _graph()
+    depth = max(m.count(".") for m in graph)
+    assert {d: _strongly_connected(_packages_at(graph, d)) for d in range(1, depth)} == \
+        {d: [] for d in range(1, depth)}
+
+
+def test_the_check_finds_a_circle_when_there_is_one():
+    graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}
+    assert _strongly_connected(graph) == [["a", "b", "c"]]
+    assert _packages_at({"optdesign.p.x": {"optdesign.q.y"}, "optdesign.q.y": {"optdesign.p.z"},
+                         "optdesign.p.z": set()}, 1) == {"optdesign.p": {"optdesign.q"},
+                                                         "optdesign.q": {"optdesign.p"}}
+
+
+def test_the_package_root_holds_only_its_doors_and_leaves():
+    """The root keeps the API, the command line, and the leaves every layer needs (errors,
+    key declarations, child-process lifetime); everything else lives in a named package."""
+    flat = sorted(p.name for p in PACKAGE.glob("*.py"))
+    assert flat == ["__init__.py", "__main__.py", "api.py", "cli.py", "declarations.py",
+                    "errors.py", "lifetime.py"]
 
 
 def test_a_new_constraint_is_one_object(monkeypatch):
@@ -172,14 +264,15 @@ class Depth(TurnQuantity):
 
 @pytest.fixture
 def depth_quantity(tmp_path, monkeypatch):
-    """The worked example of docs/architecture.md: one module in the quantities package
-    (here a folder added to the package's path) and nothing else."""
+    """The worked example of docs/architecture.md: one module in the quantities' catalog
+    (here a folder added to the catalog's path) and nothing else."""
     import optdesign.quantities as quantities
+    from optdesign.quantities import catalog
 
     folder = tmp_path / "more_quantities"
     folder.mkdir()
     (folder / "depth.py").write_text(DEPTH_MODULE)
-    monkeypatch.setattr(quantities, "__path__", [*quantities.__path__, str(folder)])
+    monkeypatch.setattr(catalog, "__path__", [*catalog.__path__, str(folder)])
     quantities._registry.cache_clear()
     yield
     quantities._registry.cache_clear()
@@ -214,5 +307,5 @@ def test_a_new_quantity_is_one_module(depth_quantity, tmp_path):
     path.write_text(yaml.safe_dump(data))
     least = solve(load_problem(path))
     assert least.status == "optimal" and least.quantities["values"]["depth"] < depth
-    from optdesign.pareto.front import quantity_columns
+    from optdesign.fronts.front import quantity_columns
     assert "depth" in quantity_columns()

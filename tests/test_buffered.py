@@ -6,9 +6,9 @@ import threading
 import numpy as np
 import pytest
 
-from optdesign.buffered import buffered
-from optdesign.design import Design
-from optdesign.problem import load_problem
+from optdesign.numerics.buffered import buffered
+from optdesign.evaluation.design import Design
+from optdesign.problem.loader import load_problem
 
 ROOT = "problems/"
 

@@ -48,12 +48,12 @@ def paper_text(old: str, new: str) -> str:
 # --------------------------------------------------------------------------- output folders
 #: every command that writes, with a problem it accepts and the function its work starts in
 WRITERS = [
-    ("solve", FREE_FILE, "optdesign.solve.solve"),
-    ("curves", PAPER_FILE, "optdesign.curves.member_curves"),
-    ("driveline", DRIVELINE_FILE, "optdesign.analysis.analyze"),
+    ("solve", FREE_FILE, "optdesign.solver.solve"),
+    ("curves", PAPER_FILE, "optdesign.analyses.curves.member_curves"),
+    ("driveline", DRIVELINE_FILE, "optdesign.analyses.analyze.analyze"),
     ("simulate", DYNAMICS_FILE, "optdesign.dynamics.steady.simulate"),
-    ("bench", PAPER_FILE, "optdesign.accuracy.accuracy_rows"),
-    ("pareto", FREE_FILE, "optdesign.pareto.sweep"),
+    ("bench", PAPER_FILE, "optdesign.analyses.accuracy.accuracy_rows"),
+    ("pareto", FREE_FILE, "optdesign.fronts.sweep"),
 ]
 
 
@@ -89,7 +89,7 @@ def test_bad_out_is_exit_2_before_any_work(tmp_path, capsys, monkeypatch, comman
 
 
 def test_a_file_of_the_set_that_is_a_folder_is_refused(tmp_path, capsys, monkeypatch):
-    _no_work(monkeypatch, "optdesign.curves.member_curves")
+    _no_work(monkeypatch, "optdesign.analyses.curves.member_curves")
     (tmp_path / "curves.png").mkdir()
     code, _, err = run(capsys, "curves", PAPER_FILE, "--out", tmp_path)
     assert code == 2 and "curves.png there is a folder" in one_line(err)
@@ -151,7 +151,7 @@ def test_bad_names_exit_2(write_problem, capsys, name, message):
     ("../../../somewhere", "somewhere"), ("/etc/passwd", "etc_passwd"), ("...", "problem"),
     ("a b/c", "a_b_c"), ("ωμέγα", "ωμέγα"), ("é" * 100, "é" * 60), ("x.", "x")])
 def test_names_become_one_folder_name(name, folder):
-    from optdesign.output_checks import default_out
+    from optdesign.outputs.checks import default_out
     assert default_out(name) == Path("results") / folder
     assert default_out(name, "_pareto") == Path("results") / f"{folder}_pareto"
 
@@ -327,14 +327,14 @@ def test_command_line_counts_have_limits(capsys, argv, message):
 
 def test_points_limit_matches_the_section():
     from optdesign.commands.pareto import MAX_POINTS
-    from optdesign.pareto.section import MAX_POINTS as SECTION_MAX_POINTS
+    from optdesign.fronts.section import MAX_POINTS as SECTION_MAX_POINTS
     assert MAX_POINTS == SECTION_MAX_POINTS
 
 
 # --------------------------------------------------------------------------- JSON
 def test_json_output_has_no_infinity(capsys, monkeypatch):
     """A figure that is not finite is null, and its object says why in non_finite."""
-    from optdesign.analysis import AnalysisResult
+    from optdesign.analyses.analyze import AnalysisResult
     real = AnalysisResult.to_dict
 
     def with_infinity(self):
@@ -354,7 +354,7 @@ def test_json_output_has_no_infinity(capsys, monkeypatch):
 def test_json_files_have_no_infinity(tmp_path):
     import numpy as np
 
-    from optdesign.io import atomic_write_json, json_text
+    from optdesign.outputs.atomic import atomic_write_json, json_text
     path = atomic_write_json(tmp_path / "r.json", {"a": [np.inf, 1.0], "b": np.float64("-inf"),
                                                    "c": {"d": np.nan}, "e": np.arange(2)})
     assert strict_json(path.read_text()) == {"a": [None, 1.0], "b": None, "c": {
@@ -366,7 +366,7 @@ def test_json_files_have_no_infinity(tmp_path):
 # --------------------------------------------------------------------------- the process
 def test_scheduler_that_does_not_answer_is_exit_2_within_seconds(capsys, monkeypatch):
     pytest.importorskip("distributed")
-    _no_work(monkeypatch, "optdesign.pareto.sweep")
+    _no_work(monkeypatch, "optdesign.fronts.sweep")
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
         code, _, err = run(capsys, "pareto", FREE_FILE, "--out", tmp,
@@ -400,7 +400,7 @@ def test_closed_pipe_is_quiet():
 def test_unexpected_errors_are_one_line(capsys, monkeypatch, exc, message, code):
     def fail(problem, values=None):
         raise exc
-    monkeypatch.setattr("optdesign.analysis.analyze", fail)
+    monkeypatch.setattr("optdesign.analyses.analyze.analyze", fail)
     got, _, err = run(capsys, "analyze", PAPER_FILE)
     assert got == code and message in one_line(err)
     got, _, err = run(capsys, "--debug", "analyze", PAPER_FILE)

@@ -7,8 +7,8 @@ import pytest
 import yaml
 
 from optdesign.cli import main
-from optdesign.curves import member_curves, plot_curves
-from optdesign.design import Design
+from optdesign.analyses.curves import member_curves, plot_curves
+from optdesign.evaluation.design import Design
 from optdesign.mechanisms import known
 from optdesign.mechanisms.pulse_reducer import paper_position
 from tests.conftest import ROOT, base_problem
@@ -88,7 +88,7 @@ def test_cli_curves_design_that_does_not_assemble(tmp_path, write_problem, capsy
 
 def test_analyze_does_not_load_matplotlib():
     code = ("import sys; from optdesign.cli import build_parser; build_parser(); "
-            "import optdesign.analysis, optdesign.curves; "
+            "import optdesign.analyses.analyze, optdesign.analyses.curves; "
             "print('matplotlib' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          cwd=ROOT, check=True)

@@ -18,7 +18,7 @@ from optdesign.cli import main
 from optdesign.driveline import model
 from optdesign.driveline.section import DrivelineSection
 from optdesign.errors import ProblemError
-from optdesign.problem import load_problem, problem_from_dict
+from optdesign.problem.loader import load_problem, problem_from_dict
 
 ROOT = Path(__file__).resolve().parents[1]
 PROBLEM = ROOT / "problems" / "driveline.yaml"
@@ -281,7 +281,7 @@ def test_solve_constraints_scale_with_speed_factor_and_vanish_without_the_key():
 
 
 def test_verify():
-    from optdesign.analysis import analyze
+    from optdesign.analyses.analyze import analyze
 
     problem = load_problem(PROBLEM)
     result = analyze(problem)
@@ -300,7 +300,7 @@ def test_verify():
 
 
 def test_analyze_reports_the_constraint():
-    from optdesign.analysis import analyze
+    from optdesign.analyses.analyze import analyze
 
     problem = load_problem(PROBLEM)
     out = analyze(problem).to_dict()["driveline"]

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from optdesign import mechanisms
-from optdesign.design import Design
-from optdesign.envelope import output_envelope, sampled_figures
-from optdesign.exact import exact_figures
+from optdesign.evaluation.design import Design
+from optdesign.envelope.sampled import output_envelope, sampled_figures
+from optdesign.envelope.exact import exact_figures
 from optdesign.mechanisms.base import Mechanism, VariableSpec
 
 
@@ -83,7 +83,7 @@ def test_a_design_evaluated_again_reuses_its_figures_and_another_does_not(sine):
     """The exact evaluator keeps the last designs' per-eccentricity figures: the same design
     (a new but equal Design) gets the very same objects back, a design that differs in one
     length, the stroke or the eccentricity is evaluated afresh, and the store stays bounded."""
-    from optdesign import evaluation
+    from optdesign.evaluation import figures as evaluation
 
     first = evaluation.evaluate(sine(4), "forward", 1.0, (1.0, 0.5))
     again = evaluation.evaluate(sine(4), "forward", 1.0, (1.0, 0.5))

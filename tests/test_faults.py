@@ -19,8 +19,8 @@ import pytest
 import yaml
 
 from optdesign.cli import main
-from optdesign.outputs import SOLVE_FILES
-from optdesign.pareto.store import Journal
+from optdesign.commands.files import SOLVE_FILES
+from optdesign.fronts.store import Journal
 from tests.conftest import ROOT
 from tests.pareto.conftest import small
 
@@ -288,7 +288,7 @@ def _write_set(names, text):
 @pytest.mark.parametrize("atomic_exchange", [True, False])
 def test_a_set_replaces_the_previous_one_whole_and_leaves_the_users_files(
         tmp_path, monkeypatch, atomic_exchange):
-    from optdesign import output_dir
+    from optdesign.outputs import folder as output_dir
     if not atomic_exchange:                     # a platform without renameat2: two renames
         monkeypatch.setattr(output_dir, "_exchange", lambda a, b: False)
     out = tmp_path / "out"
@@ -310,7 +310,7 @@ def test_a_set_replaces_the_previous_one_whole_and_leaves_the_users_files(
 
 
 def test_the_next_run_undoes_or_completes_what_a_kill_left(tmp_path):
-    from optdesign.output_dir import MARKER, OutputFolder
+    from optdesign.outputs.folder import MARKER, OutputFolder
     old_set = {n: f"old {n}" for n in SOLVE_FILES}
 
     def make(folder, files):

@@ -10,10 +10,10 @@ import pytest
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from optdesign.accuracy import plot_accuracy  # noqa: E402
-from optdesign.design import Design  # noqa: E402
-from optdesign.pareto.report import plot_lengths  # noqa: E402
-from optdesign.plots import linkage, place_labels, plot_mechanism  # noqa: E402
+from optdesign.analyses.accuracy import plot_accuracy  # noqa: E402
+from optdesign.evaluation.design import Design  # noqa: E402
+from optdesign.fronts.report import plot_lengths  # noqa: E402
+from optdesign.figures.design import linkage, place_labels, plot_mechanism  # noqa: E402
 
 #: one design of every registered mechanism (the papers' own sizes)
 DESIGNS = {

@@ -54,9 +54,9 @@ def _declared_paths() -> list[str]:
     from optdesign.driveline.section import KEYS as DRIVELINE
     from optdesign.dynamics.section import KEYS as DYNAMICS
     from optdesign.mechanisms import REGISTRY, get_mechanism
-    from optdesign.pareto.section import KEYS as PARETO
-    from optdesign.problem import (EXTRA_CONSTRAINT_KEYS, GENERAL_CONSTRAINT_KEYS,
-                                   SECTION_PARSERS, SOLVER_INTEGERS, TOP_KEYS)
+    from optdesign.fronts.section import KEYS as PARETO
+    from optdesign.problem.loader import (EXTRA_CONSTRAINT_KEYS, GENERAL_CONSTRAINT_KEYS,
+                                          SECTION_PARSERS, SOLVER_INTEGERS, TOP_KEYS)
 
     paths = set(TOP_KEYS) | set(SECTION_PARSERS)
     for data in BASES.values():
@@ -356,7 +356,7 @@ def _written_json_is_valid(folder: Path):
 
 def _stays_inside(work: Path):
     """What the command wrote is under work/results/: folders one level down, each with at
-    most its lock file beside it (optdesign.output_dir)."""
+    most its lock file beside it (optdesign.outputs.folder)."""
     results = work / "results"
     if results.exists():
         folders = {c.name for c in results.iterdir() if c.is_dir()}

@@ -4,7 +4,7 @@ import stat
 
 import pytest
 
-from optdesign.io import atomic_write_json, atomic_write_text
+from optdesign.outputs.atomic import atomic_write_json, atomic_write_text
 
 
 def test_written_file_has_the_usual_rights(tmp_path):

@@ -10,7 +10,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from optdesign.lanes import Lanes
+from optdesign.numerics.lanes import Lanes
 from optdesign.mechanisms import get_mechanism, known
 
 

@@ -1,5 +1,5 @@
 """Whatever lies beside an output folder is untrusted: planted links and manifests turn nothing
-against the user (optdesign.output_dir, optdesign.output_checks, optdesign.pareto.store).
+against the user (optdesign.outputs.folder, optdesign.outputs.checks, optdesign.fronts.store).
 
 Each test plants one of the files a hostile neighbour (another user of a shared /tmp, or a
 careless script) could leave, runs the real code on the folder, and checks that nothing
@@ -17,10 +17,10 @@ import yaml
 
 from optdesign.cli import main
 from optdesign.errors import ProblemError, UsageError
-from optdesign.output_checks import prepare_out, resolve_out
-from optdesign import output_dir
-from optdesign.output_dir import MARKER, OutputFolder
-from optdesign.outputs import SOLVE_FILES
+from optdesign.outputs.checks import prepare_out, resolve_out
+from optdesign.outputs import folder as output_dir
+from optdesign.outputs.folder import MARKER, OutputFolder
+from optdesign.commands.files import SOLVE_FILES
 from tests.conftest import ROOT
 
 FREE_FILE = ROOT / "problems" / "sharkov2022_disc.yaml"
@@ -227,7 +227,7 @@ def test_resume_refuses_a_journal_that_is_a_link(tmp_path, small_problem, victim
 
 
 def test_the_journal_is_never_appended_through_a_link(tmp_path, victim):
-    from optdesign.pareto.store import Journal
+    from optdesign.fronts.store import Journal
     journal = Journal(tmp_path / "points.jsonl")
     journal.start({"points": 3}, resume=False)
     (tmp_path / "points.jsonl").unlink()

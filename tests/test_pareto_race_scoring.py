@@ -37,7 +37,7 @@ def test_hypervolume_of_a_known_staircase():
     assert norm.hypervolume(beyond) == pytest.approx(0.7725, abs=1e-12)
     assert norm.hypervolume(f[[0, 2]]) == pytest.approx(0.21, abs=1e-12)
     assert norm.hypervolume(np.zeros((0, 2))) == 0.0
-    from optdesign.pareto.indicators import hypervolume_2d
+    from optdesign.fronts.indicators import hypervolume_2d
     assert norm.hypervolume(f) == pytest.approx(hypervolume_2d(norm.normalise(f)), abs=1e-12)
 
 

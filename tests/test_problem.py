@@ -7,7 +7,7 @@ import yaml
 
 from optdesign.cli import main
 from optdesign.errors import ProblemError
-from optdesign.problem import SOLVER_INTEGERS, load_problem
+from optdesign.problem.loader import SOLVER_INTEGERS, load_problem
 from tests.conftest import ROOT, base_problem
 
 

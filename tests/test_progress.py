@@ -7,11 +7,11 @@ import json
 import pytest
 import yaml
 
-import optdesign.accuracy as accuracy
-from optdesign.accuracy import Reference, evaluation_count
+import optdesign.analyses.accuracy as accuracy
+from optdesign.analyses.accuracy import Reference, evaluation_count
 from optdesign.cli import main
-from optdesign.envelope import StrokeFigures
-from optdesign.io import SCHEMA_VERSION
+from optdesign.envelope.sampled import StrokeFigures
+from optdesign.outputs.atomic import SCHEMA_VERSION
 from tests.conftest import ROOT
 from tests.test_units import unlisted
 
@@ -135,7 +135,7 @@ def test_driveline_violated_unchecked_and_without_an_output_speed(tmp_path, caps
 
 def test_simulate_reports_each_turn_to_its_progress_callback():
     from optdesign.dynamics.steady import simulate
-    from optdesign.problem import load_problem
+    from optdesign.problem.loader import load_problem
     from tests.conftest import ROOT
 
     turns = []

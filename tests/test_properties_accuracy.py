@@ -6,10 +6,10 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from optdesign.design import Design
-from optdesign.envelope import output_envelope, sampled_figures
+from optdesign.evaluation.design import Design
+from optdesign.envelope.sampled import output_envelope, sampled_figures
 from optdesign.errors import AssemblyError
-from optdesign.exact import exact_figures
+from optdesign.envelope.exact import exact_figures
 
 N_FINE = 1 << 13
 

@@ -12,9 +12,9 @@ import math
 import numpy as np
 import pytest
 
-from optdesign.design import Design
-from optdesign.evaluation import evaluate_problem
-from optdesign.problem import load_problem
+from optdesign.evaluation.design import Design
+from optdesign.evaluation.figures import evaluate_problem
+from optdesign.problem.loader import load_problem
 from optdesign.quantities import design_quantities, get_quantity, known, quantities_of
 from optdesign.quantities.extremes import BREAK_STEP, _sample
 from tests.conftest import ROOT

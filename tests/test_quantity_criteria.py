@@ -1,5 +1,5 @@
 """Criteria over quantities: ``constraints: {QUANTITY: {lower, upper, at}}`` and
-``objective: {minimize: QUANTITY}`` (optdesign.quantities.bounds, optdesign.criteria).
+``objective: {minimize: QUANTITY}`` (optdesign.quantities.bounds, optdesign.quantities.criteria).
 
 Each optimum is re-verified exactly, a bound that binds holds to the check's tolerance, and no
 design of a dense sample of the box that meets every constraint exactly beats the solve.
@@ -9,12 +9,12 @@ import math
 import numpy as np
 import pytest
 
-from optdesign.criteria import objective_of, quantity_specs
+from optdesign.quantities.criteria import objective_of, quantity_specs
 from optdesign.errors import ProblemError
-from optdesign.evaluation import evaluate_problem
-from optdesign.problem import load_problem, problem_from_dict
+from optdesign.evaluation.figures import evaluate_problem
+from optdesign.problem.loader import load_problem, problem_from_dict
 from optdesign.quantities import design_quantities
-from optdesign.solve import solve, verify
+from optdesign.solver import solve, verify
 from tests.conftest import ROOT, file_data
 
 HOUSING_FILE = ROOT / "problems" / "housing_disc.yaml"
@@ -78,7 +78,7 @@ def _best_of_a_sample(problem, n=16384, verified=120):
     pass the screening's filters, each checked by the exact evaluator."""
     from dataclasses import replace
 
-    from optdesign.solve.screening import screen
+    from optdesign.solver.screening import screen
 
     count = problem.counts()[0]
     other = replace(problem, solver=replace(problem.solver, seed=problem.solver.seed + 7))

@@ -14,12 +14,12 @@ from optdesign.cli import main
 from optdesign.declarations import REQUIRED
 from optdesign.errors import ProblemError
 from optdesign.mechanisms import get_mechanism, known
-from optdesign.problem import (SECTION_PARSERS, load_problem, problem_from_dict)
-from optdesign.problem_keys import constraint_keys, problem_keys, section_keys, walk
-from optdesign.problem_schema import problem_schema
-from optdesign.problem_yaml import parse
-from optdesign.reference import REGENERATE, reference_markdown
-from optdesign.starter import STARTERS, starter_text
+from optdesign.problem.loader import (SECTION_PARSERS, load_problem, problem_from_dict)
+from optdesign.problem.keys import constraint_keys, problem_keys, section_keys, walk
+from optdesign.problem.schema import problem_schema
+from optdesign.problem.yaml_text import parse
+from optdesign.problem.reference import REGENERATE, reference_markdown
+from optdesign.problem.starter import STARTERS, starter_text
 from tests.conftest import ROOT, base_problem
 
 MECHANISMS = known()

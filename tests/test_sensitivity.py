@@ -1,4 +1,4 @@
-"""Exact sensitivities of a design (optdesign.sensitivity) against finite differences of the
+"""Exact sensitivities of a design (optdesign.evaluation.sensitivity) against finite differences of the
 exact evaluator.
 
 Central differences with h = 1e-4 mm: their truncation error is O(h²·f''') ~ 1e-9 relative and
@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
 
-from optdesign.design import Design
-from optdesign.evaluation import evaluate_problem
-from optdesign.problem import load_problem
-from optdesign.sensitivity import sensitivities
+from optdesign.evaluation.design import Design
+from optdesign.evaluation.figures import evaluate_problem
+from optdesign.problem.loader import load_problem
+from optdesign.evaluation.sensitivity import sensitivities
 from tests.conftest import ROOT
 
 H = 1e-4                      # mm
@@ -49,7 +49,7 @@ def assert_matches_central(problem, values, which=(0, 1, 2)):
 
 @pytest.fixture(scope="module")
 def disc():
-    from optdesign.solve.driver import solve
+    from optdesign.solver.driver import solve
 
     problem = load_problem(ROOT / "problems" / "sharkov2022_disc.yaml")
     result = solve(problem)
@@ -121,7 +121,7 @@ def test_fourbar_with_every_length_free_matches_finite_differences(ripple):
 
 
 def test_a_solve_carries_the_block_and_prints_one_line(disc):
-    from optdesign.solve.outputs import summary_text
+    from optdesign.solver.outputs import summary_text
 
     problem, result = disc
     block = result.to_dict()["sensitivities"]

@@ -12,8 +12,8 @@ import pytest
 import yaml
 
 from optdesign.cli import main
-from optdesign.io import SCHEMA_VERSION
-from optdesign.units import OPAQUE, gear_ratio_text, units_of
+from optdesign.outputs.atomic import SCHEMA_VERSION
+from optdesign.outputs.units import OPAQUE, gear_ratio_text, units_of
 from tests.conftest import ROOT, run_main
 from tests.pareto.conftest import SMALL
 
@@ -138,7 +138,7 @@ def test_midrange_is_named_so_and_its_old_name_stays_one_release(outputs):
 
 
 def test_the_old_attribute_warns():
-    from optdesign.envelope import StrokeFigures
+    from optdesign.envelope.sampled import StrokeFigures
 
     f = StrokeFigures.from_extremes(3.0, 1.0, 2.1, 10.0)
     assert f.omega_midrange == 2.0 and f.delta == 1.0

@@ -12,14 +12,14 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..analysis import analyze, format_analysis
-    from ..io import json_text
-    from ..problem import load_problem
+    from optdesign.analyses.analyze import analyze, format_analysis
+    from optdesign.outputs.atomic import json_text
+    from optdesign.problem.loader import load_problem
 
     problem = load_problem(args.problem)
     out = None
     if args.out is not None:
-        from ..output_checks import prepare_out
+        from optdesign.outputs.checks import prepare_out
         out = prepare_out(args.out, problem.name, files=("regulation.png",))
     result = analyze(problem)
     if args.json:
@@ -27,8 +27,8 @@ def run(args) -> int:
     else:
         print(format_analysis(result, problem.name))
     if out is not None and result.assembles:
-        from ..analysis import regulation_curve
-        from ..outputs import write_regulation
+        from optdesign.analyses.analyze import regulation_curve
+        from optdesign.commands.files import write_regulation
 
         path = write_regulation(regulation_curve(problem), result.regulation_range,
                                 f"{problem.name}: δ and ratio against e", out)

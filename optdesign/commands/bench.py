@@ -1,6 +1,6 @@
 """``optdesign bench accuracy [PROBLEM.yaml] [--json] [--out DIR] [--solve PROBLEM] [--quick]``.
 
-Error of δ, the ratio and ω_min against run time for every evaluator (optdesign.accuracy).
+Error of δ, the ratio and ω_min against run time for every evaluator (optdesign.analyses.accuracy).
 """
 from __future__ import annotations
 
@@ -31,13 +31,13 @@ def run(args) -> int:
 
     from tqdm import tqdm
 
-    from ..accuracy import accuracy_rows, evaluation_count, format_table
-    from ..errors import ProblemError, UsageError
-    from ..io import json_text
-    from ..output_checks import prepare_out
-    from ..outputs import write_accuracy
-    from ..problem import load_problem
-    from ..units import stamped
+    from optdesign.analyses.accuracy import accuracy_rows, evaluation_count, format_table
+    from optdesign.errors import ProblemError, UsageError
+    from optdesign.outputs.atomic import json_text
+    from optdesign.outputs.checks import prepare_out
+    from optdesign.commands.files import write_accuracy
+    from optdesign.problem.loader import load_problem
+    from optdesign.outputs.units import stamped
 
     problem = load_problem(args.problem)
     if args.crosscheck < 0:

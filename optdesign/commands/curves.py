@@ -17,12 +17,12 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..curves import member_curves
-    from ..design import Design
-    from ..errors import UsageError
-    from ..output_checks import prepare_out
-    from ..outputs import write_curves
-    from ..problem import MIN_ECCENTRICITY, load_problem
+    from optdesign.analyses.curves import member_curves
+    from optdesign.evaluation.design import Design
+    from optdesign.errors import UsageError
+    from optdesign.outputs.checks import prepare_out
+    from optdesign.commands.files import write_curves
+    from optdesign.problem.loader import MIN_ECCENTRICITY, load_problem
 
     problem = load_problem(args.problem)
     if not 0 < args.eccentricity <= 1:

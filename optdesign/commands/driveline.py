@@ -18,12 +18,12 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..analysis import analyze
-    from ..driveline.report import driveline_report, format_driveline
-    from ..io import json_text
-    from ..output_checks import prepare_out
-    from ..outputs import write_driveline
-    from ..problem import load_problem
+    from optdesign.analyses.analyze import analyze
+    from optdesign.driveline.report import driveline_report, format_driveline
+    from optdesign.outputs.atomic import json_text
+    from optdesign.outputs.checks import prepare_out
+    from optdesign.commands.files import write_driveline
+    from optdesign.problem.loader import load_problem
 
     problem = load_problem(args.problem)
     section = problem.require_section("driveline")

@@ -17,9 +17,9 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..errors import UsageError, shown
-    from ..mechanisms import known
-    from ..starter import STARTERS, starter_text
+    from optdesign.errors import UsageError, shown
+    from optdesign.mechanisms import known
+    from optdesign.problem.starter import STARTERS, starter_text
 
     if args.mechanism not in known():
         raise UsageError(f"--mechanism: unknown mechanism {shown(args.mechanism)}; known: "
@@ -30,9 +30,9 @@ def run(args) -> int:
         print(starter_text(args.mechanism), end="")
         return 0
     path = _checked_out(Path(args.out), args.force)
-    from ..io import atomic_write_text
+    from optdesign.outputs.atomic import atomic_write_text
 
-    from ..problem import name_from_stem
+    from optdesign.problem.loader import name_from_stem
 
     try:
         atomic_write_text(path, starter_text(args.mechanism, name=name_from_stem(path.stem)))
@@ -46,8 +46,8 @@ def run(args) -> int:
 def _checked_out(path: Path, force: bool) -> Path:
     """``path`` if init may write it: not a folder, in a folder that exists, and new (or
     ``force``)."""
-    from ..errors import UsageError, shown
-    from ..output_checks import system_tree
+    from optdesign.errors import UsageError, shown
+    from optdesign.outputs.checks import system_tree
 
     label = f"--out {shown(str(path))}"
     if not str(path) or "\0" in str(path):

@@ -42,14 +42,15 @@ def _positive(low, high=None):
 
 
 def run(args) -> int:
-    from ..errors import ProblemError
-    from ..lifetime import exit_on_sigterm
-    from ..output_checks import prepare_out, resolve_out
-    from ..output_dir import OutputFolder
-    from ..pareto import sweep
-    from ..outputs import PARETO_FILES, write_front, write_report
-    from ..pareto.report import summary_text
-    from ..problem import load_problem
+    from optdesign.errors import ProblemError
+    from optdesign.lifetime import exit_on_sigterm
+    from optdesign.outputs.checks import prepare_out, resolve_out
+    from optdesign.outputs.folder import OutputFolder
+    from optdesign.fronts import sweep
+    from optdesign.commands.files import PARETO_FILES, write_report
+    from optdesign.fronts.files import write_front
+    from optdesign.fronts.report import summary_text
+    from optdesign.problem.loader import load_problem
 
     problem = load_problem(args.problem)
     if not problem.free_lengths():          # nothing to trade: say so before any work
@@ -82,12 +83,12 @@ def run(args) -> int:
 
 def _connected(address):
     """A Dask client of ``address`` checked within one deadline
-    (:func:`optdesign.pareto.cluster.connect`; a context manager, ``None`` inside when no
+    (:func:`optdesign.fronts.cluster.connect`; a context manager, ``None`` inside when no
     scheduler is given): an address that is malformed, silent or not a Dask scheduler is a
     usage error, found before any work."""
     from contextlib import nullcontext
 
     if address is None:
         return nullcontext(None)
-    from ..pareto.cluster import connect
+    from optdesign.fronts.cluster import connect
     return connect(address)

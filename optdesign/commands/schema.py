@@ -12,10 +12,10 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     if args.markdown:
-        from ..reference import reference_markdown
+        from optdesign.problem.reference import reference_markdown
         print(reference_markdown(), end="")
     else:
-        from ..io import json_text
-        from ..problem_schema import problem_schema
+        from optdesign.outputs.atomic import json_text
+        from optdesign.problem.schema import problem_schema
         print(json_text(problem_schema()))
     return 0

@@ -30,13 +30,13 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     from dataclasses import replace
 
-    from ..dynamics.section import MAX_CYCLES
-    from ..dynamics.steady import simulate
-    from ..errors import SolveError, UsageError
-    from ..io import json_text
-    from ..output_checks import prepare_out
-    from ..outputs import write_simulation
-    from ..problem import load_problem
+    from optdesign.dynamics.section import MAX_CYCLES
+    from optdesign.dynamics.steady import simulate
+    from optdesign.errors import SolveError, UsageError
+    from optdesign.outputs.atomic import json_text
+    from optdesign.outputs.checks import prepare_out
+    from optdesign.commands.files import write_simulation
+    from optdesign.problem.loader import load_problem
 
     problem = load_problem(args.problem)
     section = problem.require_section("dynamics")
@@ -71,9 +71,9 @@ def run(args) -> int:
 
 def _failed(problem, section, args, out, exc) -> int:
     """An integration that stopped before a cycle: dynamics.json holds status and reason."""
-    from ..dynamics.integrator import StallError
-    from ..dynamics.result import failure_dict
-    from ..io import atomic_write_json, json_text
+    from optdesign.dynamics.integrator import StallError
+    from optdesign.dynamics.result import failure_dict
+    from optdesign.outputs.atomic import atomic_write_json, json_text
 
     data = failure_dict(problem, section, args.method or section.method,
                         "stalled" if isinstance(exc, StallError) else "failed", str(exc))

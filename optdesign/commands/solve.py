@@ -14,14 +14,14 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..io import json_text
-    from ..output_checks import prepare_out
-    from ..problem import load_problem
-    from ..solve import solve
-    from ..lifetime import exit_on_sigterm, raise_if_terminated
-    from ..output_dir import OutputFolder
-    from ..outputs import SOLVE_FILES, write_solve
-    from ..solve.outputs import summary_text
+    from optdesign.outputs.atomic import json_text
+    from optdesign.outputs.checks import prepare_out
+    from optdesign.problem.loader import load_problem
+    from optdesign.solver import solve
+    from optdesign.lifetime import exit_on_sigterm, raise_if_terminated
+    from optdesign.outputs.folder import OutputFolder
+    from optdesign.commands.files import SOLVE_FILES, write_solve
+    from optdesign.solver.outputs import summary_text
 
     problem = load_problem(args.problem)
     out = prepare_out(args.out, problem.name, files=SOLVE_FILES)     # before any work

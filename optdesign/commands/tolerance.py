@@ -33,15 +33,15 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from ..errors import UsageError
-    from ..io import json_text
-    from ..output_checks import prepare_out
-    from ..outputs import TOLERANCE_FILES, write_tolerance
-    from ..problem import load_problem
-    from ..tolerance.montecarlo import monte_carlo
-    from ..tolerance.parts import box_of
-    from ..tolerance.report import format_tolerance, tolerance_document
-    from ..tolerance.worst_case import worst_case
+    from optdesign.errors import UsageError
+    from optdesign.outputs.atomic import json_text
+    from optdesign.outputs.checks import prepare_out
+    from optdesign.commands.files import TOLERANCE_FILES, write_tolerance
+    from optdesign.problem.loader import load_problem
+    from optdesign.tolerance.montecarlo import monte_carlo
+    from optdesign.tolerance.parts import box_of
+    from optdesign.tolerance.report import format_tolerance, tolerance_document
+    from optdesign.tolerance.worst_case import worst_case
 
     problem = load_problem(args.problem)
     if "tolerances" not in problem.sections:
@@ -103,8 +103,8 @@ def read_design(path: str, problem) -> dict:
     import math
     from pathlib import Path
 
-    from ..errors import ProblemError, UsageError, shown
-    from ..problem_yaml import read_text
+    from optdesign.errors import ProblemError, UsageError, shown
+    from optdesign.problem.yaml_text import read_text
 
     try:                        # a regular file of at most 1 MiB (never /dev/zero or a FIFO)
         text = read_text(Path(path))

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ProblemError
+from optdesign.errors import ProblemError
 
 #: GOST 5005-82: the limiting deviation from straightness of a cardan-shaft tube on any
 #: 1 m of its length, mm per metre, by accuracy class (the paper, before eq. 11).

@@ -5,8 +5,8 @@ bare :class:`matplotlib.figure.Figure`, so no GUI backend is touched.
 """
 from __future__ import annotations
 
-from .model import PRINCIPAL_IMBALANCE_FACTOR
-from .section import G_MM_PER_KG_M
+from optdesign.driveline.model import PRINCIPAL_IMBALANCE_FACTOR
+from optdesign.driveline.section import G_MM_PER_KG_M
 
 
 def plot_driveline(section, ax=None, operating_speed: float | None = None,

@@ -1,6 +1,6 @@
 """The ``driveline:`` section of a problem file: the cardan shaft after the variator's output.
 
-Registered in ``optdesign.problem.SECTION_PARSERS`` and imported only when a problem file has
+Registered in ``optdesign.problem.loader.SECTION_PARSERS`` and imported only when a problem file has
 the section. Keys (lengths in mm, speeds in rad/s)::
 
     driveline:
@@ -27,9 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..declarations import REQUIRED, Key, names
-from ..errors import ProblemError
-from . import model
+from optdesign.declarations import REQUIRED, Key, names
+from optdesign.errors import ProblemError
+from optdesign.driveline import model
 
 TUBE_KEYS = ("outer_diameter_mm", "wall_mm", "youngs_modulus_gpa", "density_kg_m3")
 DIRECT_KEYS = ("mass_per_length_kg_m", "EI_n_m2")

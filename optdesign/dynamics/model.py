@@ -39,10 +39,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..buffered import BufferedCall
-from ..errors import ProblemError
-from ..mechanisms import STROKE_SIGNS
-from .section import DynamicsSection, LoadTable
+from optdesign.numerics.buffered import BufferedCall
+from optdesign.errors import ProblemError
+from optdesign.envelope.sampled import STROKE_SIGNS
+from optdesign.dynamics.section import DynamicsSection, LoadTable
 
 TWO_PI = 2.0 * np.pi
 #: state vector: crank angle, crank speed, output angle, output speed, motor work, load work.
@@ -117,7 +117,7 @@ class Holders:
 class ComposedPosition:
     """Φ(φ) of the ``composite`` model: the rigid output angle ∫ max(0, max_k u_k') dφ.
 
-    Built from the exact envelope's runs (:func:`optdesign.exact.exact_figures`): on a run where
+    Built from the exact envelope's runs (:func:`optdesign.envelope.exact.exact_figures`): on a run where
     holder k drives, Φ = Φ(start) + u_k(φ) - u_k(start), so Φ is exact, continuous, and grows by
     Φ_turn per crank turn; Φ'' jumps at the hand-overs, which are therefore restart points.
     """
@@ -125,7 +125,7 @@ class ComposedPosition:
     size = 1
 
     def __init__(self, design, stroke: str, reduction: float):
-        from ..exact import exact_figures
+        from optdesign.envelope.exact import exact_figures
 
         self.holders = Holders(design, stroke, reduction)
         _, runs = exact_figures(design, stroke, 1.0)

@@ -9,7 +9,7 @@ import numpy as np
 
 
 def _axes(ax, figsize):  # noqa: D401 - one axes, made if not given
-    from ..plots import pyplot
+    from optdesign.figures.design import pyplot
 
     plt = pyplot()
 
@@ -43,7 +43,7 @@ def plot_angles(result, ax=None):
     below; on a given ``ax`` everything shares it, as in the paper's figure.
     """
     if ax is None:
-        from ..plots import pyplot
+        from optdesign.figures.design import pyplot
 
         fig, (top, bottom) = pyplot().subplots(2, 1, figsize=(7.5, 5.6), sharex=True,
                                                constrained_layout=True,

@@ -3,14 +3,14 @@
 A :class:`SimulationResult` is written as ``dynamics.json`` and printed by ``--json``; when the
 integration itself fails, :func:`failure_dict` is written in its place, with the same
 ``status`` and ``reason`` keys. Numbers that do not exist for a drive (the ripple of an output
-that never moves) stay inf or NaN here; the JSON writer (:func:`optdesign.io.json_text`) makes
+that never moves) stay inf or NaN here; the JSON writer (:func:`optdesign.outputs.atomic.json_text`) makes
 them null and lists them under ``non_finite``, and ``reason`` says why.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..envelope import StrokeFigures
+from optdesign.envelope.sampled import StrokeFigures
 
 #: ``steady``: the cycle repeated (exit 0); ``not_steady``: ``cycles`` ran out first;
 #: ``stalled``: the output never moves, or the crank cannot get round; ``failed``: the
@@ -75,7 +75,7 @@ class SimulationResult:
 
     def to_dict(self) -> dict:
         """dynamics.json: the contract's keys, then ``schema_version`` and ``units``."""
-        from ..units import stamped
+        from optdesign.outputs.units import stamped
 
         return stamped({
             "name": self.name, "mechanism": self.mechanism,
@@ -103,7 +103,7 @@ class SimulationResult:
 
 def failure_dict(problem, section, method: str, status: str, reason: str) -> dict:
     """``dynamics.json`` of a run whose integration stopped before a cycle was recorded."""
-    from ..units import stamped
+    from optdesign.outputs.units import stamped
 
     return stamped({"name": problem.name, "mechanism": problem.mechanism, "status": status,
                     "reason": reason, "steady": False,

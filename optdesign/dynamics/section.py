@@ -28,8 +28,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..declarations import REQUIRED as REQUIRED_KEY, Key
-from ..errors import ProblemError
+from optdesign.declarations import REQUIRED as REQUIRED_KEY, Key
+from optdesign.errors import ProblemError
 
 METHODS = ("Radau", "BDF", "LSODA", "RK45")
 FREEWHEEL_MODELS = ("ratchet", "composite")

@@ -25,14 +25,14 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..design import Design
-from ..envelope import StrokeFigures
-from .instants import first_turn_instants, steady_instants
-from .integrator import Integrator, Trace
-from .model import TWO_PI, DriveModel, Mode
-from .result import SimulationResult
-from .section import DynamicsSection
-from .verdict import LONGEST_PERIOD, held_whole_turn, judge
+from optdesign.evaluation.design import Design
+from optdesign.envelope.sampled import StrokeFigures
+from optdesign.dynamics.instants import first_turn_instants, steady_instants
+from optdesign.dynamics.integrator import Integrator, Trace
+from optdesign.dynamics.model import TWO_PI, DriveModel, Mode
+from optdesign.dynamics.result import SimulationResult
+from optdesign.dynamics.section import DynamicsSection
+from optdesign.dynamics.verdict import LONGEST_PERIOD, held_whole_turn, judge
 
 
 def simulate(problem, section: DynamicsSection | None = None, method: str | None = None,
@@ -58,7 +58,7 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
         The integration broke down; :class:`~optdesign.dynamics.integrator.StallError` when
         the crank cannot get round.
     """
-    from ..exact import exact_figures
+    from optdesign.envelope.exact import exact_figures
 
     section = section or problem.sections["dynamics"]
     method = method or section.method

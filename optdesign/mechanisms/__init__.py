@@ -3,8 +3,8 @@ from __future__ import annotations
 
 from importlib import import_module
 
-from ..errors import ProblemError
-from .base import STROKE_SIGNS, Mechanism, OptionSpec, VariableSpec
+from optdesign.errors import ProblemError
+from optdesign.mechanisms.base import Mechanism, OptionSpec, VariableSpec
 
 #: name -> "module:Class"; a new mechanism is one module and one line here.
 REGISTRY: dict[str, str] = {
@@ -30,5 +30,5 @@ def get_mechanism(name: str) -> Mechanism:
     return _instances[name]
 
 
-__all__ = ["REGISTRY", "STROKE_SIGNS", "Mechanism", "OptionSpec", "VariableSpec",
+__all__ = ["REGISTRY", "Mechanism", "OptionSpec", "VariableSpec",
            "get_mechanism", "known"]

@@ -13,13 +13,10 @@ from functools import lru_cache
 from typing import ClassVar, Mapping
 
 import casadi as ca
+import numpy as np
 
-from ..lanes import Lanes
-
-#: Signs applied to the rocker speeds for each stroke: the freewheels pass the rocker's motion
-#: in that direction only; ``both`` is a second output shaft through a 1:1 reversing gear pair.
-STROKE_SIGNS: dict[str, tuple[int, ...]] = {"forward": (1,), "reverse": (-1,), "both": (1, -1)}
-
+from optdesign.envelope.sampled import STROKE_SIGNS  # noqa: F401  (a mechanism's strokes)
+from optdesign.numerics.lanes import Lanes
 
 @dataclass(frozen=True)
 class VariableSpec:
@@ -77,11 +74,11 @@ class Mechanism(ABC):
         """
 
     #: keys of the ``constraints:`` section this mechanism understands beyond the general ones
-    #: (declared in ``optdesign.problem.CONSTRAINT_KEYS``, read generically by the loader)
+    #: (declared in ``optdesign.problem.loader.CONSTRAINT_KEYS``, read generically by the loader)
     constraint_keys: ClassVar[frozenset[str]] = frozenset()
 
     def criteria(self, constraints, options: Mapping[str, str]) -> list:
-        """This mechanism's own constraints (:class:`optdesign.criteria.LengthConstraint`),
+        """This mechanism's own constraints (:class:`optdesign.quantities.criteria.LengthConstraint`),
         from the problem's ``constraints`` section and options."""
         return []
 
@@ -145,6 +142,16 @@ class Mechanism(ABC):
         screening (raises :class:`NotImplementedError` where the function has instructions
         the lanes do not translate)."""
         return Lanes(self.speeds(count, options))
+
+    def speeds_at_once(self, count: int, options: tuple[tuple[str, str], ...] = ()):
+        """:meth:`speeds` evaluated at many (φ, p) columns in one call: the NumPy lanes, or
+        CasADi's ``map`` for a function the lanes cannot read. Screening and the Monte Carlo
+        both evaluate thousands of designs through this one door."""
+        try:
+            return self.speed_lanes(count, options)
+        except NotImplementedError:
+            fn = self.speeds(count, options)
+            return lambda phi, p: fn.map(np.shape(p)[1])(phi, p)
 
     @lru_cache(maxsize=64)
     def chain(self, count: int, options: tuple[tuple[str, str], ...], k: int) -> ca.Function:

@@ -35,8 +35,8 @@ import math
 
 import casadi as ca
 
-from ..errors import ProblemError
-from .base import Mechanism, VariableSpec
+from optdesign.errors import ProblemError
+from optdesign.mechanisms.base import Mechanism, VariableSpec
 
 
 class SlottedLever(Mechanism):
@@ -77,7 +77,7 @@ class SlottedLever(Mechanism):
     def criteria(self, constraints, options):
         """Link 7 oscillates only while its pivot D lies beyond A's circle, XD > L:
         1 - L/XD >= assembly_margin (dimensionless, O(1) for the NLP)."""
-        from ..criteria import LengthConstraint
+        from optdesign.quantities.criteria import LengthConstraint
 
         return [LengthConstraint("pivot_outside_circle", lambda p: 1 - p["L"] / p["XD"],
                                  lower=constraints.assembly_margin, unit="-")]

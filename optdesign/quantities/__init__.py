@@ -1,9 +1,11 @@
 """Quantities: one vocabulary for every figure of a design that a criterion, a front or a
 report names (:mod:`optdesign.quantities.base`).
 
-Every module of this package that defines a :class:`~optdesign.quantities.base.Quantity`
-subclass with a ``name`` contributes it: a new quantity is one new module here, found by
-:func:`known` with nothing else to edit.
+Every module of :mod:`optdesign.quantities.catalog` that defines a
+:class:`~optdesign.quantities.base.Quantity` subclass with a ``name`` contributes it: a new
+quantity is one new module there, found by :func:`known` with nothing else to edit. The
+criteria over quantities (objectives, constraints) are :mod:`optdesign.quantities.criteria`,
+their bounds in a problem file :mod:`optdesign.quantities.bounds`.
 """
 from __future__ import annotations
 
@@ -11,7 +13,8 @@ import importlib
 import pkgutil
 from functools import lru_cache
 
-from .base import Quantity, TurnQuantity
+from optdesign.quantities import catalog
+from optdesign.quantities.base import Quantity, TurnQuantity
 
 __all__ = ["Quantity", "TurnQuantity", "design_quantities", "get_quantity", "known",
            "quantities_of"]
@@ -20,10 +23,8 @@ __all__ = ["Quantity", "TurnQuantity", "design_quantities", "get_quantity", "kno
 @lru_cache(maxsize=1)
 def _registry() -> dict[str, Quantity]:
     found: dict[str, Quantity] = {}
-    for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
-        if info.name in ("base", "extremes"):
-            continue
-        module = importlib.import_module(f"{__name__}.{info.name}")
+    for info in sorted(pkgutil.iter_modules(catalog.__path__), key=lambda m: m.name):
+        module = importlib.import_module(f"optdesign.quantities.catalog.{info.name}")
         for value in vars(module).values():
             if isinstance(value, type) and issubclass(value, Quantity) and value.name and \
                     value.__module__ == module.__name__:

@@ -13,7 +13,7 @@ reduced to one value. It is written once, as that expression and that reduction,
   a stationary point found by Brent's method (:mod:`optdesign.quantities.extremes`);
 * the NLP (:meth:`TurnQuantity.function`, :meth:`TurnQuantity.components`): the same
   expression held at exact stationary points, as the peak speed and the transmission angle
-  are (:mod:`optdesign.solve.nlp`);
+  are (:mod:`optdesign.solver.nlp`);
 * the screening (:meth:`TurnQuantity.sampled`): the grid's maxima of the same expression.
 """
 from __future__ import annotations
@@ -25,7 +25,7 @@ from typing import ClassVar
 import casadi as ca
 import numpy as np
 
-from .extremes import turn_maxima
+from optdesign.quantities.extremes import turn_maxima
 
 #: how a quantity's values combine: into its worst, and across its components
 COMBINE = {"max": max, "min": min}
@@ -113,7 +113,7 @@ class TurnQuantity(Quantity):
         """Each component's maximum over the turn, exactly (:func:`turn_maxima`),
         remembered for the designs evaluated last (a solve's check and its next start).
         ``sampled``: the evaluation's sampling at this eccentricity, when at hand."""
-        from ..exact import search_grid
+        from optdesign.envelope.exact import search_grid
 
         key = (self.name, design.mechanism, design.option_key,
                tuple(sorted(design.values.items())), float(eccentricity))

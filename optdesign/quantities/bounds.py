@@ -13,8 +13,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..declarations import Key
-from . import get_quantity, known
+from optdesign.declarations import Key
+from optdesign.quantities import get_quantity, known
 
 #: the bounds each quantity takes, besides its natural side (see the module's docstring)
 BOTH_SIDES = frozenset({"ratio"})

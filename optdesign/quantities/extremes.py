@@ -7,7 +7,7 @@ one-sided limits of its breakpoints. Each stationary point is bracketed on a gri
 changes sign from + to − and found by Brent's method to machine precision, with g' from
 CasADi's algorithmic differentiation; the grid values are kept as candidates, so the result
 never falls below what the grid shows (the same search as the output envelope's peaks,
-:mod:`optdesign.exact`, over any function).
+:mod:`optdesign.envelope.exact`, over any function).
 """
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from ..buffered import buffered
+from optdesign.numerics.buffered import buffered
 
 TWO_PI = 2 * np.pi
 #: offset of a breakpoint's one-sided limits (as the exact evaluator's)
@@ -143,7 +143,7 @@ _LANES: dict = {}
 
 def lanes_of(function):
     """The NumPy lanes of ``function``, made once (None where it does not translate)."""
-    from ..lanes import Lanes
+    from optdesign.numerics.lanes import Lanes
 
     known = _LANES.get(id(function))
     if known is None or known[0] is not function:

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 from typing import Mapping
 
-from ..errors import ProblemError
-from ..evaluation import evaluate_problem
+from optdesign.errors import ProblemError
+from optdesign.evaluation.figures import evaluate_problem
 
 
 def exact_part(problem, values: Mapping[str, float]) -> dict:

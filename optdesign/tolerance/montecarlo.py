@@ -12,10 +12,10 @@ from typing import Mapping
 
 import numpy as np
 
-from .exact_part import exact_part
-from .parts import box_of, draw_offsets
-from .sampled import calibrated, grid_size, sampled_parts
-from .section import DEFAULT_K, DEFAULT_SAMPLES
+from optdesign.tolerance.exact_part import exact_part
+from optdesign.tolerance.parts import box_of, draw_offsets
+from optdesign.tolerance.sampled import calibrated, grid_size, sampled_parts
+from optdesign.tolerance.section import DEFAULT_K, DEFAULT_SAMPLES
 
 #: the percentiles the summary reports
 PERCENTILES = (1, 5, 50, 95, 99)

@@ -11,7 +11,7 @@ from typing import Mapping
 
 import numpy as np
 
-from ..errors import ProblemError
+from optdesign.errors import ProblemError
 
 
 @dataclass(frozen=True)

@@ -1,14 +1,14 @@
 """What ``optdesign tolerance`` reports: the JSON document, the terminal table and the figure.
 
-Plot functions return the figure and never write (:mod:`optdesign.outputs` saves it); the
+Plot functions return the figure and never write (:mod:`optdesign.commands.files` saves it); the
 backend is never switched here.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..units import design_units, stamped
-from .montecarlo import summary
+from optdesign.outputs.units import design_units, stamped
+from optdesign.tolerance.montecarlo import summary
 
 
 def tolerance_document(problem, box, tolerances, frame, worst_delta, worst_angle,
@@ -93,7 +93,7 @@ def plot_tolerance(frame, doc: dict, title: str | None = None):
     where they fall inside the spread marked."""
     from matplotlib.ticker import MaxNLocator
 
-    from ..plots import pyplot
+    from optdesign.figures.design import pyplot
 
     plt = pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))

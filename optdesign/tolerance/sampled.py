@@ -1,7 +1,7 @@
 """Thousands of parts at once: δ, ratio, least transmission angle and assembly on a crank grid.
 
 The mechanism's speed function runs as NumPy lanes over parts × crank samples, exactly as the
-solve's screening runs it (:func:`optdesign.solve.screening._speeds_at_once`, the same model).
+solve's screening runs it (:meth:`~optdesign.mechanisms.base.Mechanism.speeds_at_once`, the same model).
 A screening only ranks designs; a part differs from its nominal by a few hundredths of a mm,
 so here every figure is refined between the samples. Between samples j and j + 1 each curve
 is the cubic through its samples j-1 .. j+2 (error O(h⁴)), and
@@ -23,10 +23,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..envelope import driving_speeds
-from ..evaluation import eccentricities_of
-from ..mechanisms import STROKE_SIGNS
-from ..solve.screening import _speeds_at_once
+from optdesign.envelope.sampled import driving_speeds
+from optdesign.evaluation.figures import eccentricities_of
+from optdesign.envelope.sampled import STROKE_SIGNS
 
 #: least crank samples per turn, and per driving curve (every hand-over bracketed closely)
 MIN_SAMPLES = 96
@@ -64,7 +63,7 @@ def sampled_parts(problem, count: int, lengths: np.ndarray, samples: int | None 
 def _block(problem, count: int, lengths: np.ndarray, N: int) -> dict:
     model = problem.model
     S = lengths.shape[0]
-    fmap = _speeds_at_once(model, count, tuple(sorted(problem.options.items())))
+    fmap = model.speeds_at_once(count, tuple(sorted(problem.options.items())))
     phi = np.tile(np.linspace(0.0, 2 * np.pi, N, endpoint=False), S)[None, :]
     reg = model.lengths.index(model.regulating_variable)
     delta = np.full((S, len(problem.eccentricities)), np.nan)

@@ -1,6 +1,6 @@
 """The ``tolerances:`` section of a problem file: how the parts of a design deviate when made.
 
-Registered in ``optdesign.problem.SECTION_PARSERS``; every key is optional::
+Registered in ``optdesign.problem.loader.SECTION_PARSERS``; every key is optional::
 
     tolerances:
       default: 0.05         # ± mm of every length without an entry of its own
@@ -19,8 +19,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Mapping
 
-from ..declarations import Key, names
-from ..mechanisms import get_mechanism, known
+from optdesign.declarations import Key, names
+from optdesign.mechanisms import get_mechanism, known
 
 DEFAULT_TOLERANCE_MM = 0.05
 DISTRIBUTIONS = ("uniform", "normal")
@@ -85,7 +85,7 @@ class ToleranceSection:
     def check_problem(self, problem) -> None:
         """Every named length is one of the mechanism's, and no tolerance reaches a length's
         least value (a part of zero or negative length)."""
-        from ..errors import ProblemError
+        from optdesign.errors import ProblemError
 
         mech = problem.model
         for name in self.lengths:

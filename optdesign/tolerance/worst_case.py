@@ -24,9 +24,9 @@ from typing import Mapping
 
 import numpy as np
 
-from .exact_part import exact_part
-from .montecarlo import evaluate_offsets
-from .parts import Box, box_of
+from optdesign.tolerance.exact_part import exact_part
+from optdesign.tolerance.montecarlo import evaluate_offsets
+from optdesign.tolerance.parts import Box, box_of
 
 QUANTITIES = ("ripple", "transmission_angle")
 #: corners evaluated at most (all of them up to 2⁸)

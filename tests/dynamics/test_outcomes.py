@@ -168,11 +168,11 @@ def test_the_bouncing_is_mechanics_not_numerics():
     flight: the motion that never repeats is the model's, not an event lost or doubled."""
     from dataclasses import replace
 
-    from optdesign.design import Design
+    from optdesign.evaluation.design import Design
     from optdesign.dynamics.integrator import Integrator
     from optdesign.dynamics.model import DriveModel
     from optdesign.dynamics.steady import _initial_state, _rebase
-    from optdesign.problem import load_problem
+    from optdesign.problem.loader import load_problem
 
     problem = load_problem(FOURBAR)
     section = replace(problem.sections["dynamics"], freewheel="composite")
@@ -205,7 +205,7 @@ def test_a_bdf_root_bracketing_failure_is_redone_with_radau(monkeypatch):
 
     from optdesign.dynamics.integrator import Integrator
     from optdesign.dynamics.steady import simulate
-    from optdesign.problem import load_problem
+    from optdesign.problem.loader import load_problem
 
     solve = Integrator._solve
     calls = {"BDF": 0}

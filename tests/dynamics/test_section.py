@@ -4,7 +4,7 @@ import yaml
 
 from optdesign.cli import main
 from optdesign.errors import ProblemError
-from optdesign.problem import load_problem
+from optdesign.problem.loader import load_problem
 from tests.conftest import ROOT, base_problem
 
 DYN = dict(I1=0.014, I2=0.05, stiffness=2877.0, motor={"a": 230.0, "b": 2.35}, load=5.0)

@@ -11,7 +11,7 @@ import pytest
 
 from optdesign.cli import main
 from optdesign.dynamics.steady import simulate
-from optdesign.problem import load_problem, problem_from_dict
+from optdesign.problem.loader import load_problem, problem_from_dict
 from tests.conftest import ROOT, base_problem
 
 PAPER = ROOT / "problems" / "pulse_reducer_dynamics.yaml"
@@ -101,7 +101,7 @@ def test_rigid_limit_approaches_kinematic_ripple():
     """λ → ∞ with a light output (I2 = 1e-4, so the load stops any overrun): the dynamic
     ripple tends to the kinematic δ of `analyze` (0.3764, the paper's design). Observed: 0.04 % off
     at λ = 1e7, 5.8 % at λ = 1e4; tolerance 0.2 % at 1e7."""
-    from optdesign.analysis import analyze
+    from optdesign.analyses.analyze import analyze
 
     kinematic = analyze(fourbar()).strokes["forward"].delta
     errors = []

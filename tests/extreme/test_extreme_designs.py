@@ -10,12 +10,12 @@ import math
 import numpy as np
 import pytest
 
-from optdesign.analysis import analyze, transmission_angles
-from optdesign.design import Design
-from optdesign.envelope import sampled_figures
+from optdesign.analyses.analyze import analyze, transmission_angles
+from optdesign.evaluation.design import Design
+from optdesign.envelope.sampled import sampled_figures
 from optdesign.errors import AssemblyError, ProblemError
-from optdesign.exact import exact_figures
-from optdesign.problem import problem_from_dict
+from optdesign.envelope.exact import exact_figures
+from optdesign.problem.loader import problem_from_dict
 from tests.conftest import PAPER, base_problem
 
 W1 = 97.0

@@ -1,11 +1,11 @@
 """The solver on ill-conditioned problems: IPOPT converges on the scaled variables (each free
-length divided by the geometric mean of its bounds, optdesign/solve/nlp.py) or fails clearly;
+length divided by the geometric mean of its bounds, optdesign/solver/nlp.py) or fails clearly;
 every returned optimum is re-verified, never a silent wrong one."""
 import pytest
 import yaml
 
-from optdesign.problem import problem_from_dict
-from optdesign.solve import solve, verify
+from optdesign.problem.loader import problem_from_dict
+from optdesign.solver import solve, verify
 from tests.conftest import ROOT
 
 FAST = {"starts": 3, "agree": 1}

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 from hypothesis import assume, given, settings, strategies as st
 
-from optdesign.design import Design
+from optdesign.evaluation.design import Design
 from optdesign.errors import AssemblyError
-from optdesign.exact import exact_figures
+from optdesign.envelope.exact import exact_figures
 from tests.conftest import PAPER
 
 W1 = 97.0   # rad/s: not in the paper; reproduces its table (docs/papers.md)
@@ -143,7 +143,7 @@ def test_more_phases_less_ripple():
 ])
 def test_grashof_constraints(lengths, ok):
     from optdesign.mechanisms import get_mechanism
-    from optdesign.problem import Constraints
+    from optdesign.problem.loader import Constraints
     criteria = get_mechanism("fourbar_converter").criteria(Constraints(grashof=True), {})
     g = [float(c.formula(lengths)) for c in criteria if c.name.startswith("grashof")]
     assert len(g) == 3
@@ -155,7 +155,7 @@ def test_pin_radius_follows_the_pin_layout(layout, radius):
     """|AC_i| = l2 - l2' (collinear, the default) or l2' (eq. 2 to the letter): the mechanism
     owns the formula, so a report never computes it from key names."""
     from optdesign.mechanisms import get_mechanism
-    from optdesign.problem import Constraints
+    from optdesign.problem.loader import Constraints
     (pin,) = get_mechanism("fourbar_converter").criteria(Constraints(min_pin_radius=60),
                                                          {"pin_layout": layout})
     assert pin.formula(dict(l0=225, l1=20, l2=225, l2_prime=100, l3=56)) == radius

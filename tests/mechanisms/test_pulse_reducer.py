@@ -10,11 +10,11 @@ from hypothesis import given, settings, strategies as st
 import yaml
 
 from optdesign.cli import main
-from optdesign.design import Design
-from optdesign.exact import exact_figures
+from optdesign.evaluation.design import Design
+from optdesign.envelope.exact import exact_figures
 from optdesign.mechanisms import get_mechanism
 from optdesign.mechanisms.pulse_reducer import paper_position, position_function
-from optdesign.problem import Constraints, load_problem
+from optdesign.problem.loader import Constraints, load_problem
 from tests.conftest import ROOT
 
 PROBLEM = ROOT / "problems" / "pulse_reducer.yaml"

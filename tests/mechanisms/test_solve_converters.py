@@ -6,10 +6,10 @@ import math
 import pytest
 
 from optdesign.cli import main
-from optdesign.design import Design
-from optdesign.exact import exact_figures
-from optdesign.problem import load_problem
-from optdesign.solve import solve
+from optdesign.evaluation.design import Design
+from optdesign.envelope.exact import exact_figures
+from optdesign.problem.loader import load_problem
+from optdesign.solver import solve
 from tests.conftest import ROOT
 
 

@@ -35,7 +35,7 @@ def small_path(tmp_path_factory):
 @pytest.fixture(scope="session")
 def small_front(small_path, tmp_path_factory):
     """(result, out folder) of one in-process sweep of the small problem."""
-    from optdesign.pareto import sweep
-    from optdesign.problem import load_problem
+    from optdesign.fronts import sweep
+    from optdesign.problem.loader import load_problem
     out = tmp_path_factory.mktemp("pareto_out")
     return sweep(load_problem(small_path), out, workers=1, progress=False), out

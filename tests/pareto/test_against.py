@@ -10,10 +10,10 @@ import yaml
 
 from optdesign.cli import main
 from optdesign.errors import ProblemError
-from optdesign.pareto import sweep
-from optdesign.problem import load_problem, problem_from_dict
+from optdesign.fronts import sweep
+from optdesign.problem.loader import load_problem, problem_from_dict
 from optdesign.quantities import design_quantities
-from optdesign.solve import verify
+from optdesign.solver import verify
 from tests.conftest import ROOT
 
 from .conftest import small

@@ -12,7 +12,7 @@ import time
 import pandas as pd
 import pytest
 
-from optdesign.pareto.store import Journal
+from optdesign.fronts.store import Journal
 from tests.conftest import ROOT
 
 distributed = pytest.importorskip("distributed")

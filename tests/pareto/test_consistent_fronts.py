@@ -1,16 +1,16 @@
 """Fronts a designer can trust: no point called optimal that a known design beats on its own
 ε-problem, no points closer than the designer's resolution, an honest knee.
 
-The synthetic fronts below are journal records (optdesign.pareto.refine works on records
+The synthetic fronts below are journal records (optdesign.fronts.refine works on records
 alone); the front that turns back is the one a designer met: n = 8, the ratio's interior
 points of a few 1e-4 of δ more than the largest-ratio end, which reaches every one of their ε.
 """
 import numpy as np
 import pytest
 
-from optdesign.pareto.front import evaluate, frame
-from optdesign.pareto.indicators import indicators
-from optdesign.pareto.refine import (LOCAL, Refinement, beater, gaps, plan, plan_hypervolume,
+from optdesign.fronts.front import evaluate, frame
+from optdesign.fronts.indicators import indicators
+from optdesign.fronts.refine import (LOCAL, Refinement, beater, gaps, plan, plan_hypervolume,
                                      visible)
 
 from .test_refinement import LENGTHS, rec
@@ -97,8 +97,8 @@ def test_the_resolution_counts_the_parts_a_stretch_can_take(a, b, parts):
 
 
 def test_the_report_says_where_the_front_jumps_and_why():
-    from optdesign.pareto.front import ParetoResult
-    from optdesign.pareto.report import jumps, knee_reason
+    from optdesign.fronts.front import ParetoResult
+    from optdesign.fronts.report import jumps, knee_reason
 
     shown = visible(turned_back()[:6] + [turned_back()[-1]], LENGTHS)
     points = frame(shown, LENGTHS)

@@ -1,7 +1,7 @@
 """``--scheduler``: the same points on a Dask distributed cluster (a small LocalCluster)."""
 import pytest
 
-from optdesign.problem import problem_from_dict
+from optdesign.problem.loader import problem_from_dict
 
 from .conftest import small
 
@@ -9,7 +9,7 @@ distributed = pytest.importorskip("distributed")
 
 
 def test_dask_cluster_gives_the_local_front(small_front, tmp_path):
-    from optdesign.pareto import sweep
+    from optdesign.fronts import sweep
     problem = problem_from_dict(small(points=3), where="small.yaml")
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
                                   dashboard_address=None) as cluster:

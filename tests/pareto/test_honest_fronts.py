@@ -1,7 +1,7 @@
 """A front says what it is: one design is no trade-off, a fixed design is no front, and the
 report names what binds along the front and what limits the ratio."""
 from optdesign.cli import main
-from optdesign.pareto.indicators import indicators
+from optdesign.fronts.indicators import indicators
 from tests.conftest import ROOT
 
 
@@ -22,8 +22,8 @@ def test_a_fixed_design_is_not_a_front(tmp_path, capsys):
 
 
 def test_points_name_what_binds_and_the_report_what_limits_the_ratio(small_front, small_path):
-    from optdesign.pareto.report import blocks
-    from optdesign.problem import load_problem
+    from optdesign.fronts.report import blocks
+    from optdesign.problem.loader import load_problem
 
     result, _ = small_front
     ok = result.points[result.points["status"] == "optimal"]

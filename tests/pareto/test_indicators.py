@@ -4,8 +4,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from optdesign.pareto.front import frame
-from optdesign.pareto.indicators import (hypervolume_2d, indicators, knee, non_dominated,
+from optdesign.fronts.front import frame
+from optdesign.fronts.indicators import (hypervolume_2d, indicators, knee, non_dominated,
                                          normalise, objectives, spacing)
 
 

@@ -8,8 +8,8 @@ import pytest
 
 from optdesign.cli import main
 from optdesign.errors import ProblemError
-from optdesign.pareto import sweep
-from optdesign.problem import load_problem
+from optdesign.fronts import sweep
+from optdesign.problem.loader import load_problem
 
 
 def _copy(small_front, tmp_path):

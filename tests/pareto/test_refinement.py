@@ -6,14 +6,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from optdesign.pareto import sweep
-from optdesign.pareto.refine import (MAX_ROUNDS, Refinement, gaps, merge_identical, plan,
+from optdesign.fronts import sweep
+from optdesign.fronts.refine import (MAX_ROUNDS, Refinement, gaps, merge_identical, plan,
                                      plan_hypervolume, superseded, visible)
-from optdesign.pareto.seeds import RATIO_SLACK, ScreenedCount
-from optdesign.pareto.store import Journal
-from optdesign.pareto.worker import Candidate, best_candidate
-from optdesign.problem import problem_from_dict
-from optdesign.solve import verify
+from optdesign.fronts.seeds import RATIO_SLACK, ScreenedCount
+from optdesign.fronts.store import Journal
+from optdesign.fronts.worker import Candidate, best_candidate
+from optdesign.problem.loader import problem_from_dict
+from optdesign.solver import verify
 
 from .conftest import small
 
@@ -259,7 +259,7 @@ def test_hypervolume_rounds_add_verified_points_and_resume_alike(tmp_path):
     verified points where the refined front left the largest areas, the hypervolume on one
     normalisation does not fall, and a run killed after the first of them resumes to the
     same ε values."""
-    from optdesign.pareto.indicators import hypervolume_2d, non_dominated, normalise, objectives
+    from optdesign.fronts.indicators import hypervolume_2d, non_dominated, normalise, objectives
 
     settings = {"max_points": 2, "hypervolume_points": 4, "hypervolume_gap": 1e-3}
     problem = problem_from_dict(small(refine=settings), where="small.yaml")
@@ -298,7 +298,7 @@ def test_a_dominated_point_of_a_real_sweep_is_re_solved_and_none_is_left(tmp_pat
     one row."""
     import yaml
 
-    from optdesign.solve import driver
+    from optdesign.solver import driver
 
     monkeypatch.setattr(driver._Polishing, "apart", lambda self: False)
 

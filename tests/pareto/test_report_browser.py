@@ -13,7 +13,7 @@ import subprocess
 
 import pytest
 
-from optdesign.problem import load_problem
+from optdesign.problem.loader import load_problem
 
 FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
          "--disable-background-networking", "--disable-component-update", "--disable-sync"]
@@ -53,7 +53,7 @@ def _run(chromium, tmp_path, *args) -> str:
 
 @pytest.fixture(scope="module")
 def report(small_front, small_path, tmp_path_factory):
-    from optdesign.outputs import write_report
+    from optdesign.commands.files import write_report
     out = tmp_path_factory.mktemp("report")
     write_report(small_front[0], load_problem(small_path), out)
     return out / "report.html"

@@ -9,7 +9,7 @@ import pandas as pd
 import yaml
 
 from optdesign.cli import main
-from optdesign.pareto.store import Journal
+from optdesign.fronts.store import Journal
 from tests.conftest import ROOT
 
 from .conftest import small

@@ -1,7 +1,7 @@
 """``--scheduler`` at an address where something else answers: an HTTP server, a server that
 sends garbage, nothing at all. Each is exit 2 with one line within the one deadline, through
 the command line and through the API, never a hang or a read that exhausts memory
-(optdesign.pareto.cluster); a real scheduler still passes the same check."""
+(optdesign.fronts.cluster); a real scheduler still passes the same check."""
 import http.server
 import socket
 import threading
@@ -97,7 +97,7 @@ def test_a_closed_port_and_a_malformed_address_are_named(problem_file, tmp_path,
 
 
 def test_a_real_scheduler_passes_the_check():
-    from optdesign.pareto.cluster import connect
+    from optdesign.fronts.cluster import connect
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
                                   dashboard_address=None) as cluster:
         client = connect(cluster.scheduler_address)

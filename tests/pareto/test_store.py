@@ -1,5 +1,5 @@
 """The journal points.jsonl: whole lines only, a cut line dropped on resume."""
-from optdesign.pareto.store import Journal
+from optdesign.fronts.store import Journal
 
 
 def _rec(index, delta):

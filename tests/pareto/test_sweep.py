@@ -6,10 +6,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from optdesign.pareto.sweep import grid
-from optdesign.pareto.section import ParetoSection
-from optdesign.problem import load_problem
-from optdesign.solve import verify
+from optdesign.fronts.sweep import grid
+from optdesign.fronts.section import ParetoSection
+from optdesign.problem.loader import load_problem
+from optdesign.solver import verify
 
 CONTRACT = ["phases", "delta", "ratio", "l0", "l1", "l2", "l2_prime", "l3", "status"]
 
@@ -47,7 +47,7 @@ def test_ratio_bound_binds_and_its_multiplier_is_the_local_slope(small_front):
 
 
 def test_json_and_report_are_written(small_front, small_path):
-    from optdesign.outputs import write_report
+    from optdesign.commands.files import write_report
     result, out = small_front
     data = json.loads((out / "pareto.json").read_text())
     assert data["indicators"]["n_points"] == 4
@@ -74,7 +74,7 @@ def test_grid_clips_the_span_to_the_reachable_range():
 
 
 def test_chains_walk_away_from_the_nearer_end():
-    from optdesign.pareto.sweep import _chains
+    from optdesign.fronts.sweep import _chains
     eps = np.linspace(0.5, 0.9, 8)
     assert _chains([1, 2, 3, 4, 5, 6], eps, 2) == [[1, 2, 3], [6, 5, 4]]
     eps = np.linspace(0.5, 0.9, 10)

@@ -4,8 +4,8 @@ from dataclasses import replace
 
 import pytest
 
-from optdesign.problem import load_problem
-from optdesign.solve.driver import solve_phase
+from optdesign.problem.loader import load_problem
+from optdesign.solver.driver import solve_phase
 from tests.conftest import ROOT
 
 
@@ -56,8 +56,8 @@ def test_a_length_bound_sensitivity_matches_a_re_solve(disc):
 def test_a_pin_radius_held_at_zero_and_a_length_on_its_bound_are_warned_of(disc):
     """Without min_pin_radius the optimum puts every rod on the crank pin (l2 = l2'):
     the summary says so, and names the lengths resting on a bound."""
-    from optdesign.solve.driver import solve
-    from optdesign.solve.outputs import summary_text
+    from optdesign.solver.driver import solve
+    from optdesign.solver.outputs import summary_text
 
     problem, _ = disc
     loose = replace(problem, constraints=replace(problem.constraints, min_pin_radius=0.0),

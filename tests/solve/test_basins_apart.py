@@ -1,4 +1,4 @@
-"""A phase count whose best basins end apart is polished further (optdesign/solve/driver.py,
+"""A phase count whose best basins end apart is polished further (optdesign/solver/driver.py,
 ``_Polishing.apart``): the disc kept, reverse stroke, six phases. The screening ranks a basin
 by its seed's sampled δ, and the basin of the optimum (l3 ≈ 27 mm on the transmission-angle
 bound, δ = 0.14165) ranks fourth; the two best basins give δ = 0.14634 and a polish that does
@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from optdesign.problem import load_problem
-from optdesign.solve import driver, solve, verify
+from optdesign.problem.loader import load_problem
+from optdesign.solver import driver, solve, verify
 
 ROOT = Path(__file__).resolve().parents[2]
 

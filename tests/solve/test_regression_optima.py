@@ -7,8 +7,8 @@ instead of at samples with a 0.01° safety margin: the binding angle is now exac
 (40.0000000 or 30.0000000 degrees, verified), which buys 5e-6 to 9e-6 of δ."""
 import pytest
 
-from optdesign.problem import load_problem
-from optdesign.solve import solve, verify
+from optdesign.problem.loader import load_problem
+from optdesign.solver import solve, verify
 from tests.conftest import ROOT
 
 #: problem -> (δ of the earlier solver, δ now): equal to 1e-9 unless a better basin was found

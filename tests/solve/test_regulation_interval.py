@@ -7,12 +7,12 @@ import json
 import numpy as np
 import pytest
 
-from optdesign.design import Design
+from optdesign.evaluation.design import Design
 from optdesign.errors import ProblemError
-from optdesign.problem import problem_from_dict
-from optdesign.regulation import _AtEccentricity, worst_over_range
-from optdesign.solve import PhaseSolver, solve, solve_phase
-from optdesign.solve.nlp import PhaseNLP
+from optdesign.problem.loader import problem_from_dict
+from optdesign.evaluation.regulation import _AtEccentricity, worst_over_range
+from optdesign.solver import PhaseSolver, solve, solve_phase
+from optdesign.solver.nlp import PhaseNLP
 from tests.conftest import ROOT
 
 REFERENCE = ROOT / "benchmarks" / "results" / "regulation_scan.json"

@@ -8,8 +8,8 @@ import pytest
 import yaml
 
 from optdesign.errors import ProblemError
-from optdesign.problem import problem_from_dict
-from optdesign.solve import PhaseSolver, solve_phase
+from optdesign.problem.loader import problem_from_dict
+from optdesign.solver import PhaseSolver, solve_phase
 from optdesign.tolerance.montecarlo import monte_carlo
 from optdesign.tolerance.worst_case import worst_case
 from tests.conftest import ROOT
@@ -84,7 +84,7 @@ def test_a_robust_objective_needs_its_box(change, message):
 
 
 def test_without_robust_the_nlp_has_no_scenario():
-    from optdesign.solve.nlp import PhaseNLP
+    from optdesign.solver.nlp import PhaseNLP
 
     problem = _problem()
     assert problem.objective.robust == "none"

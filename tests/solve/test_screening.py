@@ -5,10 +5,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from optdesign.problem import Variable, load_problem
-from optdesign.solve import solve
-from optdesign.solve.driver import PhaseSolver
-from optdesign.solve.screening import Candidate, _basins, _crossings, screen
+from optdesign.problem.loader import Variable, load_problem
+from optdesign.solver import solve
+from optdesign.solver.driver import PhaseSolver
+from optdesign.solver.screening import Candidate, _basins, _crossings, screen
 from tests.conftest import ROOT
 
 DISC = ROOT / "problems" / "sharkov2022_disc.yaml"
@@ -92,8 +92,8 @@ def test_the_jacobian_needs_few_forward_directions_at_many_phases():
     which the README's account of the speed-up quotes)."""
     import casadi as ca
 
-    from optdesign.problem import load_problem
-    from optdesign.solve.nlp import PhaseNLP
+    from optdesign.problem.loader import load_problem
+    from optdesign.solver.nlp import PhaseNLP
     from tests.conftest import ROOT
 
     nlp = PhaseNLP(load_problem(ROOT / "problems" / "sharkov2022_disc.yaml"), 24)
@@ -107,8 +107,8 @@ def test_bounds_of_six_decades_around_a_feasible_design_are_not_infeasible():
     this said `infeasible`: no design within the bounds assembles)."""
     from dataclasses import replace
 
-    from optdesign.problem import load_problem
-    from optdesign.solve.driver import solve_phase
+    from optdesign.problem.loader import load_problem
+    from optdesign.solver.driver import solve_phase
     from tests.conftest import ROOT
 
     problem = load_problem(ROOT / "problems" / "sharkov2022_disc.yaml")
@@ -125,7 +125,7 @@ def test_a_range_of_decades_is_screened_evenly_in_its_logarithm():
     import numpy as np
     from scipy.stats import qmc
 
-    from optdesign.solve.screening import spread
+    from optdesign.solver.screening import spread
 
     unit = qmc.Sobol(d=2, scramble=True, seed=0).random_base2(10)
     X = spread(unit, np.array([1e-3, 100.0]), np.array([1e3, 400.0]))

@@ -6,8 +6,8 @@ import pytest
 import yaml
 
 from optdesign.cli import main
-from optdesign.problem import load_problem, problem_from_dict
-from optdesign.solve import solve, verify
+from optdesign.problem.loader import load_problem, problem_from_dict
+from optdesign.solver import solve, verify
 from tests.conftest import ROOT, file_data
 
 DISC = ROOT / "problems" / "sharkov2022_disc.yaml"
@@ -168,8 +168,8 @@ def test_the_result_answers_to_scipys_names():
     """``success``, ``x``, ``fun`` and ``nit`` as scipy.optimize.OptimizeResult has them."""
     import numpy as np
 
-    from optdesign.problem import load_problem
-    from optdesign.solve import solve
+    from optdesign.problem.loader import load_problem
+    from optdesign.solver import solve
     from tests.conftest import ROOT
 
     problem = load_problem(ROOT / "problems" / "housing_disc.yaml")

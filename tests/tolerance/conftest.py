@@ -2,7 +2,7 @@
 import pytest
 import yaml
 
-from optdesign.problem import problem_from_dict
+from optdesign.problem.loader import problem_from_dict
 from tests.conftest import ROOT
 
 

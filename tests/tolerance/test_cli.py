@@ -5,7 +5,7 @@ import json
 import pytest
 
 from optdesign.cli import main
-from optdesign.io import SCHEMA_VERSION
+from optdesign.outputs.atomic import SCHEMA_VERSION
 from optdesign.tolerance.report import format_tolerance
 from tests.conftest import ROOT, run_main
 from tests.test_units import unlisted

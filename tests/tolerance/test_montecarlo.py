@@ -4,7 +4,7 @@ import time
 import numpy as np
 import pytest
 
-from optdesign.problem import problem_from_dict
+from optdesign.problem.loader import problem_from_dict
 from optdesign.tolerance.exact_part import exact_part
 from optdesign.tolerance.montecarlo import monte_carlo, summary
 from optdesign.tolerance.parts import box_of

@@ -5,7 +5,7 @@ import pytest
 
 from optdesign.cli import main
 from optdesign.errors import ProblemError
-from optdesign.problem import problem_from_dict
+from optdesign.problem.loader import problem_from_dict
 from optdesign.tolerance.parts import box_of, draw_offsets
 from optdesign.tolerance.section import ToleranceSection
 from tests.tolerance.conftest import paper

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import optdesign.tolerance.worst_case as wc
-from optdesign.problem import problem_from_dict
+from optdesign.problem.loader import problem_from_dict
 from optdesign.tolerance.exact_part import exact_part
 from optdesign.tolerance.montecarlo import monte_carlo
 from optdesign.tolerance.parts import box_of

@@ -1,0 +1,234 @@
+"""``optdesign analyze``: evaluate a design exactly, every stroke and every listed eccentricity."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from optdesign.evaluation.design import Design
+from optdesign.envelope.sampled import StrokeFigures
+from optdesign.errors import ProblemError
+from optdesign.evaluation.figures import evaluate
+from optdesign.quantities import design_quantities
+from optdesign.evaluation.regulation import worst_over_range
+from optdesign.outputs.tabular import Tabular
+
+
+@dataclass
+class AnalysisResult(Tabular):
+    """What ``analyze`` prints: the contract's keys first (docs/contract.md)."""
+
+    assembles: bool
+    min_transmission_angle_deg: float | None
+    strokes: dict[str, StrokeFigures]
+    design: dict[str, float]
+    mechanism: str
+    input_speed: float
+    chains_min_transmission_angle_deg: list[float] = field(default_factory=list)
+    regulation: list[dict] = field(default_factory=list)
+    failure: dict | None = None
+    sections: dict[str, dict] = field(default_factory=dict)
+    #: the problem file's constraints checked on this design by the exact evaluator: name,
+    #: satisfied, margin (>= 0 when satisfied; negative: by how much it is violated), unit
+    constraints: list[dict] = field(default_factory=list)
+    #: with a regulation interval: its ends, and the worst δ and least transmission angle over
+    #: it with their eccentricities (``eccentricity_range, worst_eccentricity, delta,
+    #: angle_eccentricity, min_transmission_angle_deg``)
+    regulation_range: dict | None = None
+    #: every quantity's exact value (:func:`optdesign.quantities.quantities_of`: ``values``
+    #: and ``per_eccentricity``); empty when the design does not assemble
+    quantities: dict = field(default_factory=dict)
+
+    def summary(self) -> str:
+        lengths = ", ".join(f"{k} = {v:g}" for k, v in self.design.items())
+        if not self.assembles:
+            return f"{self.mechanism} ({lengths}): does not assemble: {self.failure['message']}"
+        return (f"{self.mechanism} ({lengths}): least transmission angle "
+                f"{self.min_transmission_angle_deg:.2f}°")
+
+    def to_frame(self):
+        """One row per listed eccentricity and stroke: the exact ω_max, ω_min, midrange and
+        time mean (rad/s), δ (midrange and mean) and the ratio."""
+        import pandas as pd
+
+        rows = [{"eccentricity": r["eccentricity"], "stroke": stroke,
+                 "min_transmission_angle_deg": r["min_transmission_angle_deg"], **figures}
+                for r in self.regulation for stroke, figures in r["strokes"].items()]
+        return pd.DataFrame(rows)
+
+    def to_dict(self) -> dict:
+        out = {
+            "assembles": self.assembles,
+            "min_transmission_angle_deg": self.min_transmission_angle_deg,
+            "strokes": {k: v.to_dict() for k, v in self.strokes.items()},
+            "mechanism": self.mechanism,
+            "input_speed": self.input_speed,
+            "design": self.design,
+            "chains_min_transmission_angle_deg": self.chains_min_transmission_angle_deg,
+            "regulation": self.regulation,
+        }
+        if self.regulation_range is not None:
+            out["regulation_range"] = self.regulation_range
+        if self.failure:
+            out["failure"] = self.failure
+        out["constraints"] = self.constraints
+        out["quantities"] = self.quantities
+        out.update(self.sections)
+        from optdesign.outputs.units import design_units, stamped
+        return stamped(out, design_units(self.mechanism))
+
+
+def transmission_angles(design: Design, eccentricity: float = 1.0,
+                        n_grid: int = 720) -> np.ndarray:
+    """Least transmission angle of every chain, degrees (:meth:`Design.transmission_angles`)."""
+    return design.transmission_angles(eccentricity, n_grid)
+
+
+def analyze(problem, values: dict | None = None) -> AnalysisResult:
+    """Exact figures of the problem's design (fixed and initial values) or of ``values``.
+
+    A design that does not assemble at some eccentricity comes back with ``assembles`` false
+    and a ``failure`` naming the chain and the crank angle; nothing is computed past it.
+    """
+    design = Design.from_problem(problem, values)
+    mech = design.model
+    result = AnalysisResult(assembles=True, min_transmission_angle_deg=None, strokes={},
+                            design={k: float(v) for k, v in design.values.items()},
+                            mechanism=problem.mechanism, input_speed=problem.input_speed)
+    result.design[mech.count_variable] = design.count
+    eccentricities = sorted(set(problem.eccentricities) | {1.0}, reverse=True)
+    ev = evaluate(design, problem.stroke, problem.input_speed, eccentricities, mech.strokes)
+    if isinstance(ev.failure, ProblemError):
+        raise ev.failure
+    if ev.failure is None and problem.eccentricity_range is not None:
+        # the whole interval, as the solve's verification sees it
+        worst = worst_over_range(design, problem.stroke, problem.input_speed,
+                                 problem.objective.ripple, *problem.eccentricity_range)
+        if worst.failure is not None:
+            ev.failure, ev.failed_eccentricity = worst.failure, worst.failed_eccentricity
+        else:
+            ev.worst, ev.worst_definition = worst, problem.objective.ripple
+            result.regulation_range = {
+                "eccentricity_range": [worst.lower, worst.upper],
+                "worst_eccentricity": worst.eccentricity, "delta": worst.delta,
+                "angle_eccentricity": worst.angle_eccentricity,
+                "min_transmission_angle_deg": worst.min_angle_deg}
+    if ev.failure is not None:
+        exc = ev.failure
+        result.assembles = False
+        result.failure = {"chain": exc.chain, "phi_deg": exc.phi_deg,
+                          "eccentricity": ev.failed_eccentricity, "message": str(exc)}
+        return result
+    for x in ev.per_e:
+        angles = x.chain_angles_deg
+        if x.eccentricity == 1.0:
+            result.strokes = x.figures
+            result.chains_min_transmission_angle_deg = [float(a) for a in angles]
+            result.min_transmission_angle_deg = float(angles.min())
+        if x.eccentricity in problem.eccentricities:
+            result.regulation.append({"eccentricity": x.eccentricity,
+                                      "min_transmission_angle_deg": float(angles.min()),
+                                      "strokes": {k: v.to_dict() for k, v in x.figures.items()}})
+    for key, section in problem.sections.items():
+        if hasattr(section, "analyze"):
+            result.sections[key] = section.analyze(problem, result)
+    result.constraints = check_constraints(problem, ev)
+    result.quantities = design_quantities(problem, ev)
+    return result
+
+
+def check_constraints(problem, ev) -> list[dict]:
+    """Every constraint of the problem checked on the evaluation ``ev`` (listed
+    eccentricities and e = 1) exactly as the solver's verification checks an optimum
+    (:func:`optdesign.solver.verify.checks`), without evaluating the design again."""
+    from optdesign.quantities.criteria import Measured
+    from optdesign.solver.verify import checks
+
+    return [{"name": criterion.name, "satisfied": holds,
+             "margin": 0.0 - amount if np.isfinite(amount) else None,
+             "unit": criterion.unit or "-"}
+            for criterion, amount, holds in checks(problem, Measured.of(problem, ev))]
+
+
+def format_analysis(result: AnalysisResult, name: str = "") -> str:
+    """A readable table of an analysis, for the terminal."""
+    from optdesign.outputs.units import design_units, gear_ratio_text
+
+    units = design_units(result.mechanism)
+    lines = [f"{name or result.mechanism}: {result.mechanism}, ω1 = {result.input_speed:g} rad/s"]
+    lines.append("design: " + ", ".join(
+        f"{k} = {v:g}" + (f" {units[k]}" if units.get(k, "-") != "-" else "")
+        for k, v in result.design.items()))
+    if not result.assembles:
+        lines.append(f"does NOT assemble: {result.failure['message']}")
+        return "\n".join(lines)
+    lines.append(f"least transmission angle: {result.min_transmission_angle_deg:.2f} deg "
+                 f"(per chain: {', '.join(f'{a:.1f}' for a in result.chains_min_transmission_angle_deg)})")
+    for row in result.regulation:
+        lines.append("")
+        lines.append(f"eccentricity {row['eccentricity']:g}:")
+        lines.append(f"  {'stroke':<8} {'ω_max':>8} {'ω_min':>8} {'ω_mid':>8} {'ω_mean':>8} "
+                     f"{'δ':>7} {'δ_mean':>7} {'ratio':>7} {'i=1/ratio':>9}")
+        for stroke, f in row["strokes"].items():
+            lines.append(f"  {stroke:<8} {f['omega_max']:8.3f} {f['omega_min']:8.3f} "
+                         f"{f['omega_midrange']:8.3f} {f['omega_mean']:8.3f} {f['delta']:7.4f} "
+                         f"{f['delta_mean']:7.4f} {f['ratio']:7.4f} "
+                         f"{gear_ratio_text(f['ratio']):>9}")
+    if result.regulation:
+        lines.append("  speeds in rad/s; ω_mid the midrange (ω_max + ω_min)/2, ω_mean the time "
+                     "mean;")
+        lines.append("  ratio = output speed / input speed; the gear ratio i = n_in/n_out is "
+                     "1/ratio")
+    r = result.regulation_range
+    if r is not None:
+        lines.append("")
+        lower, upper = r["eccentricity_range"]
+        lines.append(f"over the regulation interval e in [{lower:g}, {upper:g}]: "
+                     f"worst δ = {r['delta']:.6f} at e = {r['worst_eccentricity']:.4f}; least "
+                     f"transmission angle {r['min_transmission_angle_deg']:.2f} deg at e = "
+                     f"{r['angle_eccentricity']:.4f}")
+    if result.quantities:
+        from optdesign.quantities import get_quantity
+        lines.append("")
+        lines.append("quantities (worst over the listed eccentricities; the ratio at e = 1):")
+        for name, value in result.quantities["values"].items():
+            q = get_quantity(name)
+            unit = "" if q.unit == "-" else f" {q.unit}"
+            lines.append(f"  {name:<20} {value:12.6g}{unit}")
+    if result.constraints:
+        lines.append("")
+        lines.append("constraints of the problem file:")
+        for c in result.constraints:
+            margin = "" if c["margin"] is None else \
+                f" (margin {c['margin']:+.4g}{'' if c['unit'] == '-' else ' ' + c['unit']})"
+            lines.append(f"  {c['name']:<24} {'satisfied' if c['satisfied'] else 'VIOLATED'}"
+                         f"{margin}")
+    for key, section in result.sections.items():
+        lines.append("")
+        lines.append(f"{key}: " + ", ".join(f"{k} = {v:.4g}" if isinstance(v, float) else
+                                            f"{k} = {v}" for k, v in section.items()))
+    return "\n".join(lines)
+
+
+#: eccentricities of ``analyze --out``'s figure when the file lists points: (0, 1] from this
+#: fraction on (the ratio vanishes at 0), where the design assembles
+FIGURE_LEAST_ECCENTRICITY = 0.01
+FIGURE_POINTS = 60
+
+
+def regulation_curve(problem, values: dict | None = None) -> dict:
+    """δ, the ratio and the least transmission angle of the problem's design against e: over
+    the regulation interval, or over (0, 1] where the design assembles when the file lists
+    eccentricities (NaN where it does not); with ``lower``, ``upper`` (the interval or
+    None) and ``listed``. What ``analyze --out`` draws into regulation.png."""
+    from optdesign.evaluation.regulation import curve_over_range
+
+    design = Design.from_problem(problem, values)
+    span = problem.eccentricity_range
+    lower, upper = span if span is not None else (FIGURE_LEAST_ECCENTRICITY, 1.0)
+    es = np.linspace(lower, upper, FIGURE_POINTS)
+    curve = curve_over_range(design, problem.stroke, problem.input_speed,
+                             problem.objective.ripple, es)
+    curve.update(interval=span, listed=tuple(problem.eccentricities),
+                 ripple=problem.objective.ripple)
+    return curve

@@ -1,0 +1,212 @@
+"""One exact evaluation of a design: every figure a check, a report or a start guess reads.
+
+Per eccentricity the design is sampled once, on the exact evaluator's search grid; from that one
+sampling come the assembly check, the exact output figures of each stroke asked for (crossings
+and stationary points by Brent's method, :mod:`optdesign.envelope.exact`), the envelope's hand-over
+structure, the angles of the rocker curves' peaks, and the least transmission angle of every
+chain. Verification (:mod:`optdesign.solver.verify`), ``analyze`` and the solver's start guess
+read it instead of sampling the design again.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from optdesign.evaluation.design import Design
+from optdesign.envelope.sampled import StrokeFigures, driving_speeds
+from optdesign.errors import AssemblyError, ProblemError
+from optdesign.envelope.exact import DEFAULT_GRID, Run, exact_figures, search_grid
+from optdesign.evaluation.regulation import RangeWorst, worst_over_range
+
+
+@dataclass
+class EccentricityEvaluation:
+    """The exact figures of a design at one eccentricity fraction e."""
+
+    eccentricity: float
+    figures: dict[str, StrokeFigures]        # per stroke
+    runs: list[Run]                          # hand-overs of the evaluated (problem's) stroke
+    peak_angles: np.ndarray                  # grid angle of each driving curve's maximum
+    chain_angles_deg: np.ndarray             # least transmission angle of every chain
+    cos_extreme_angles: np.ndarray           # grid angles of max cos μ, then min cos μ, per chain
+    #: the design sampled on the search grid (theta, dtheta, ddtheta, cos_mu): what the turn
+    #: quantities read instead of sampling it again
+    sampled: dict | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def sequence(self) -> tuple[int, ...]:
+        """Which curve drives on each run, in crank order (the NLP's hand-over structure)."""
+        return tuple(r.curve for r in self.runs)
+
+    @property
+    def handovers(self) -> np.ndarray:
+        return np.array([r.start for r in self.runs])
+
+    @property
+    def min_angle_deg(self) -> float:
+        return float(self.chain_angles_deg.min())
+
+
+@dataclass
+class Evaluation:
+    """A design evaluated exactly at e = 1 (where the ratio is defined) and the listed e.
+
+    ``failure`` holds the reason when the design does not assemble (or its values make no
+    sense to the mechanism); nothing is evaluated past the first eccentricity that fails.
+    """
+
+    design: Design
+    stroke: str
+    input_speed: float
+    per_e: list[EccentricityEvaluation] = field(default_factory=list)
+    failure: AssemblyError | ProblemError | None = None
+    failed_eccentricity: float | None = None
+    #: with a regulation interval: the worst δ (of ``worst_definition``) and least
+    #: transmission angle over the whole interval (:mod:`optdesign.evaluation.regulation`)
+    worst: RangeWorst | None = None
+    worst_definition: str = "midrange"
+
+    @property
+    def assembles(self) -> bool:
+        return self.failure is None
+
+    @property
+    def eccentricities(self) -> tuple[float, ...]:
+        return tuple(x.eccentricity for x in self.per_e)
+
+    def at(self, eccentricity: float) -> EccentricityEvaluation:
+        return next(x for x in self.per_e if x.eccentricity == eccentricity)
+
+    @property
+    def strokes(self) -> dict[str, StrokeFigures]:
+        """Figures of every evaluated stroke at e = 1 (what a section reads of ``analyze``)."""
+        return self.at(1.0).figures if self.assembles else {}
+
+    @property
+    def figures(self) -> StrokeFigures:
+        """Figures of the problem's stroke at e = 1."""
+        return self.at(1.0).figures[self.stroke]
+
+    @property
+    def ratio(self) -> float:
+        return self.figures.ratio
+
+    def ripple(self, definition: str, eccentricities) -> float:
+        """Worst δ of the problem's stroke over ``eccentricities`` (and over the regulation
+        interval, when it was searched for this definition)."""
+        listed = max(self.at(e).figures[self.stroke].ripple(definition) for e in eccentricities)
+        if self.worst is not None and self.worst_definition == definition:
+            return max(listed, self.worst.delta)
+        return listed
+
+    @property
+    def min_angle_deg(self) -> float:
+        """Least transmission angle over the evaluated eccentricities (and the interval)."""
+        least = min(x.min_angle_deg for x in self.per_e)
+        return least if self.worst is None else min(least, self.worst.min_angle_deg)
+
+
+def eccentricities_of(problem) -> tuple[float, ...]:
+    """e = 1 first (where the ratio is defined), then the other listed fractions."""
+    return (1.0,) + tuple(e for e in problem.eccentricities if e != 1.0)
+
+
+def evaluate(design: Design, stroke: str, input_speed: float,
+             eccentricities=(1.0,), strokes: tuple[str, ...] | None = None,
+             n_grid: int = DEFAULT_GRID) -> Evaluation:
+    """Evaluate ``design`` once per eccentricity (``eccentricities`` should start with 1).
+
+    ``strokes`` lists the strokes whose figures are wanted (default: ``stroke`` alone); the
+    hand-over runs are those of ``stroke``.
+    """
+    strokes = strokes or (stroke,)
+    ev = Evaluation(design, stroke, input_speed)
+    try:
+        design.model.check_values(design.values, design.count)
+    except ProblemError as exc:
+        ev.failure = exc
+        return ev
+    for e in eccentricities:
+        key = (design.mechanism, design.option_key, tuple(sorted(design.values.items())),
+               stroke, input_speed, float(e), tuple(strokes), n_grid)
+        known = _EVALUATED.get(key)
+        if known is None:
+            known = _evaluate_at(design, stroke, input_speed, e, strokes, n_grid)
+            if len(_EVALUATED) >= _EVALUATED_SIZE:
+                _EVALUATED.pop(next(iter(_EVALUATED)))
+            _EVALUATED[key] = known
+        if isinstance(known, AssemblyError):
+            ev.failure, ev.failed_eccentricity = known, e
+            return ev
+        ev.per_e.append(known)
+    return ev
+
+
+#: the per-eccentricity evaluations of the designs evaluated last, oldest first: a sweep or
+#: a solve verifies a design again as the next polish's start (the same figures, exactly)
+_EVALUATED: dict = {}
+_EVALUATED_SIZE = 64
+
+
+def _evaluate_at(design: Design, stroke: str, input_speed: float, e: float,
+                 strokes: tuple[str, ...], n_grid: int):
+    """One eccentricity of :func:`evaluate`: its EccentricityEvaluation, or the
+    AssemblyError that stops it."""
+    phi = search_grid(design, e, n_grid)
+    sampled = design.sample(phi, e)
+    try:
+        design.check_assembly(e, phi=phi, cos_mu=sampled["cos_mu"])
+    except AssemblyError as exc:
+        return exc
+    figures, runs = {}, []
+    for s in strokes:
+        figures[s], r = exact_figures(design, s, input_speed, e, phi=phi, sampled=sampled)
+        if s == stroke:
+            runs = r
+    speeds = driving_speeds(sampled["dtheta"], stroke)
+    angles = design.transmission_angles(e, phi=phi, cos_mu=sampled["cos_mu"])
+    cos_mu = sampled["cos_mu"]
+    extremes = np.concatenate([phi[np.argmax(cos_mu, axis=1)], phi[np.argmin(cos_mu, axis=1)]])
+    return EccentricityEvaluation(e, figures, runs, phi[np.argmax(speeds, axis=1)],
+                                  angles, extremes, sampled)
+
+
+def evaluate_problem(problem, values=None, strokes: tuple[str, ...] | None = None,
+                     extra: tuple[float, ...] = (), search: bool = True) -> Evaluation:
+    """:func:`evaluate` of the problem's design (or ``values``) at its eccentricities, then at
+    ``extra`` ones (the solve's held interior eccentricities, in order); with a regulation
+    interval (and ``search``), its worst δ and transmission angle are searched too
+    (``Evaluation.worst``)."""
+    design = Design.from_problem(problem, values)
+    ev = evaluate(design, problem.stroke, problem.input_speed,
+                  eccentricities_of(problem) + tuple(extra), strokes)
+    if problem.eccentricity_range is not None and search and ev.assembles:
+        worst = _worst_of(problem, design)
+        if worst.failure is not None:
+            ev.failure, ev.failed_eccentricity = worst.failure, worst.failed_eccentricity
+        else:
+            ev.worst, ev.worst_definition = worst, problem.objective.ripple
+    return ev
+
+
+#: the interval searches of the designs evaluated last (a solve verifies one design again
+#: whenever its held eccentricities change): key -> RangeWorst
+_WORST_CACHE: dict = {}
+_WORST_CACHE_SIZE = 32
+
+
+def _worst_of(problem, design: Design) -> RangeWorst:
+    """:func:`~optdesign.evaluation.regulation.worst_over_range` of ``design`` over the problem's
+    interval, remembered for the last few designs."""
+    key = (problem.mechanism, problem.stroke, problem.input_speed, problem.objective.ripple,
+           problem.eccentricity_range, tuple(sorted(problem.options.items())),
+           tuple(sorted((k, float(v)) for k, v in design.values.items())))
+    worst = _WORST_CACHE.get(key)
+    if worst is None:
+        worst = worst_over_range(design, problem.stroke, problem.input_speed,
+                                 problem.objective.ripple, *problem.eccentricity_range)
+        if len(_WORST_CACHE) >= _WORST_CACHE_SIZE:
+            _WORST_CACHE.pop(next(iter(_WORST_CACHE)))
+        _WORST_CACHE[key] = worst
+    return worst

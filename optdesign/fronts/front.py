@@ -1,0 +1,185 @@
+"""A swept front as a pandas DataFrame, one row a design, with its non-dominated flags and
+indicators; written as ``pareto.csv`` and ``pareto.json``."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from optdesign.outputs.tabular import Tabular
+from optdesign.fronts.axis import Axis
+from optdesign.fronts.indicators import indicators, non_dominated, objectives
+from optdesign.fronts.refine import VERIFIED
+
+#: leading columns of pareto.csv (docs/contract.md names the first nine); the
+#: mechanism's own design keys replace l0 .. l3 for other mechanisms
+LEAD = ["phases", "delta", "ratio"]
+TAIL = ["status", "min_transmission_angle_deg", "pin_radius", "ratio_multiplier", "epsilon",
+        "kind", "count_front", "non_dominated", "binding", "ipopt_status", "iterations",
+        "time_s", "round", "start_from", "merged"]
+#: quantities with columns of their own already: delta, ratio, min_transmission_angle_deg
+ENVELOPE_QUANTITIES = ("ratio", "ripple", "transmission_angle")
+
+
+def quantity_columns() -> list[str]:
+    """Every other quantity (optdesign.quantities) is a column of its own, its worst over
+    the listed eccentricities."""
+    from optdesign.quantities import known
+
+    return [name for name in known() if name not in ENVELOPE_QUANTITIES]
+
+
+def frame(records: list[dict], lengths: list[str], axis: Axis = Axis()):
+    """DataFrame of the grid-point records, sorted by phase count and ε (refined points
+    among the others).
+
+    ``count_front``: non-dominated among the feasible points of its own phase count;
+    ``non_dominated``: non-dominated among the feasible points of every count. ``round``: 0
+    for the uniform pass, r >= 1 for the r-th refinement round; ``start_from``: the start
+    that gave the design; ``merged``: how many other ε points reached the same design (one
+    row stands for them, :func:`optdesign.fronts.refine.visible`).
+    """
+    import pandas as pd
+
+    rows = []
+    for r in records:
+        if isinstance(r["key"][1], str):          # the raw end-point solves: copied as points
+            continue
+        row = {k: r.get(k) for k in LEAD + TAIL if k in r}
+        row.update({k: r["design"].get(k) if r["design"] else None for k in lengths})
+        values = (r.get("quantities") or {}).get("values", {})
+        row.update({k: values.get(k) for k in quantity_columns()})
+        row["index"] = r["key"][1]
+        rows.append(row)
+    df = pd.DataFrame(rows, columns=LEAD + list(lengths) + TAIL + quantity_columns() + ["index"])
+    df["count_front"] = False
+    df["non_dominated"] = False
+    if len(df):
+        df = df.sort_values(["phases", "epsilon", "index"], kind="stable").reset_index(
+            drop=True)
+        ok = df["status"].isin(VERIFIED)
+        f = objectives(df.loc[ok, "delta"], gain(df.loc[ok], axis))
+        df.loc[ok, "non_dominated"] = non_dominated(f)
+        for n, group in df[ok].groupby("phases"):
+            g = objectives(group["delta"], gain(group, axis))
+            df.loc[group.index, "count_front"] = non_dominated(g)
+        if not axis.is_ratio:           # ε in the quantity's own units: the bound it held
+            df["epsilon"] = axis.sign * df["epsilon"]
+    for col in ("count_front", "non_dominated"):
+        df[col] = df[col].astype(bool)
+    return df
+
+
+def gain(points, axis: Axis):
+    """The front's second objective of every row, larger is better: the ratio, or sign times
+    the quantity the front is swept against."""
+    return axis.sign * points[axis.name].astype(float)
+
+
+@dataclass
+class ParetoResult(Tabular):
+    """What ``optdesign pareto`` found: the points, their indicators, how the run was made."""
+
+    points: object                        # pandas DataFrame (see :func:`frame`)
+    indicators: dict                      # of the non-dominated set across every count
+    per_count: dict = field(default_factory=dict)     # phases -> indicators of its own front
+    run: dict = field(default_factory=dict)
+    ends: list[dict] = field(default_factory=list)    # the raw end-point solves
+
+    @property
+    def axis(self) -> Axis:
+        """What the ripple is traded against (the ratio unless ``pareto.against`` says)."""
+        return Axis(self.run.get("against", "ratio"))
+
+    @property
+    def resolution(self) -> float:
+        """The δ resolution the front was judged at (``pareto.resolution.delta``)."""
+        return float((self.run.get("refine") or {}).get("delta_resolution", 1e-4))
+
+    @property
+    def front(self):
+        """The designs non-dominated across every phase count, by the quantity the front is
+        swept against (the ratio)."""
+        return self.points[self.points["non_dominated"]].sort_values(self.axis.name)
+
+    @property
+    def knee(self):
+        """The knee (best compromise) row of the overall front, or None."""
+        k = self.indicators.get("knee")
+        return None if k is None else self.points.loc[k]
+
+    def summary(self) -> str:
+        ind = self.indicators
+        n = ind.get("n_points", 0)
+        if not n:
+            return "no verified point on the front"
+        hv = ind.get("hypervolume")
+        return (f"{n} non-dominated designs" +
+                (f", hypervolume {hv:.4f} (normalised, reference (1.1, 1.1))" if hv else ""))
+
+    def to_frame(self):
+        """Every point of the sweep (a copy of :attr:`points`)."""
+        return self.points.copy()
+
+    def shown_frame(self):
+        """A notebook shows the front (the non-dominated designs), not every point."""
+        return self.front
+
+    def to_dict(self) -> dict:
+        """pareto.json: the run, the indicators, the knee, every point and the raw ends, then
+        ``schema_version`` and ``units``, which also give the unit of every pareto.csv
+        column (the design columns in mm)."""
+        from optdesign.outputs.units import stamped
+
+        df = self.points.replace({np.nan: None})
+        lengths = [c for c in self.points.columns
+                   if c not in LEAD + TAIL + quantity_columns() + ["index"]]
+        # a design holds the lengths and the count ("phases" here, "sections" in an end's
+        # design of the slotted lever)
+        counts = {k for end in self.ends for k in (end.get("design") or {})} - set(lengths)
+        return stamped({"run": self.run, "indicators": self.indicators,
+                        "per_count": {str(k): v for k, v in self.per_count.items()},
+                        "knee": None if self.knee is None else _plain(self.knee.to_dict()),
+                        "points": [_plain(r) for r in df.to_dict(orient="records")],
+                        "ends": self.ends},
+                       {"phases": "- (count)"} | {k: "- (count)" for k in counts}
+                       | {k: "mm" for k in lengths} | self._axis_units())
+
+    def _axis_units(self) -> dict:
+        """On a front against another quantity than the ratio, ε is a bound on it."""
+        axis = self.axis
+        if axis.is_ratio:
+            return {}
+        return {"epsilon": f"{axis.unit} (the bound on {axis.name} of the point's solve)",
+                "gain": f"{axis.unit} ({'+' if axis.sign > 0 else '-'}{axis.name}: the "
+                        f"front's second objective, larger is better)",
+                "gain_multiplier": f"1/{axis.unit} (d delta / d gain)"}
+
+
+def _plain(row: dict) -> dict:
+    out = {}
+    for k, v in row.items():
+        if isinstance(v, np.generic):
+            v = v.item()
+        if isinstance(v, float) and not np.isfinite(v):
+            v = None
+        out[k] = v
+    return out
+
+
+def evaluate(points, axis: Axis = Axis(), flat_below: float | None = None
+             ) -> tuple[dict, dict]:
+    """Indicators of the overall front (knee as a row label of ``points``) and per count;
+    a front whose δ spans less than ``flat_below`` is flat, its knee the largest-gain end."""
+    ok = points[points["status"].isin(VERIFIED)]
+    named = {"name": axis.name, "sign": axis.sign, "flat_below": flat_below}
+    overall = indicators(ok["delta"], gain(ok, axis), **named)
+    if overall["knee"] is not None:
+        overall["knee"] = int(ok.index[overall["knee"]])
+    per_count = {}
+    for n, group in ok.groupby("phases"):
+        ind = indicators(group["delta"], gain(group, axis), **named)
+        if ind["knee"] is not None:
+            ind["knee"] = int(group.index[ind["knee"]])
+        per_count[int(n)] = ind
+    return overall, per_count

@@ -1,0 +1,115 @@
+"""Atomic file writing: a crash or a kill never leaves a half-written result behind."""
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+
+#: The layout version of every JSON document the package writes or prints: its
+#: ``schema_version`` key, beside a ``units`` block (:func:`optdesign.outputs.units.stamped`;
+#: docs/contract.md, "Schema version and units"). Bump the minor part ("1.1" -> "1.2") when
+#: keys are added or one is deprecated (its alias kept beside the new name): a reader of the
+#: old layout keeps working. Bump the major part ("1.x" -> "2.0") when a key is removed,
+#: renamed without an alias, or changes its meaning or unit. Documents without the key are
+#: "1.0" (before 1.1 added ``schema_version``, ``units`` and ``omega_midrange``); 1.2 added
+#: ``quantities`` (optdesign.quantities) and a Pareto record's ``gain`` on a front against
+#: another quantity than the ratio.
+SCHEMA_VERSION = "1.2"
+
+
+def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
+    """Write to a temporary file in the same folder, fsync, then rename over ``path``."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.chmod(tmp, 0o666 & ~_umask())      # mkstemp makes 0600: give the usual rights
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def atomic_write_text(path: str | Path, text: str) -> Path:
+    return atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def atomic_write_json(path: str | Path, data) -> Path:
+    return atomic_write_text(path, json_text(data) + "\n")
+
+
+def json_text(data, indent: int | None = 2, reasons: bool = True) -> str:
+    """Strict JSON of ``data`` (no NaN, no Infinity: :func:`finite_json`), NumPy values
+    included; what every JSON file and ``--json`` print of the package is made of.
+    ``reasons=False`` leaves out the ``non_finite`` keys (records read back as table rows)."""
+    return json.dumps(finite_json(data, reasons), indent=indent, allow_nan=False,
+                      default=_jsonable)
+
+
+#: the key a JSON object gains when some of its numbers were not finite (docs/contract.md)
+NON_FINITE_KEY = "non_finite"
+
+
+def finite_json(value, reasons: bool = True):
+    """``value`` with every float that is not finite replaced by None (JSON null). A mapping
+    that held one gains ``non_finite``: {key: "inf" | "-inf" | "nan"}, so a reader can tell
+    an infinite ripple from a missing one. NumPy scalars and arrays become Python ones."""
+    value = _plain(value)
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        out, why = {}, {}
+        for k, v in value.items():
+            v = _plain(v)
+            if isinstance(v, float) and not math.isfinite(v):
+                why[str(k)] = "nan" if math.isnan(v) else ("inf" if v > 0 else "-inf")
+            out[k] = finite_json(v, reasons)
+        if why and reasons:
+            old = out.get(NON_FINITE_KEY)
+            out[NON_FINITE_KEY] = {**old, **why} if isinstance(old, dict) else why
+        return out
+    if isinstance(value, (list, tuple)):
+        return [finite_json(v, reasons) for v in value]
+    return value
+
+
+def _plain(value):
+    """A NumPy scalar or array as the Python value it holds; anything else unchanged."""
+    if type(value).__module__ == "numpy":
+        return _jsonable(value)
+    return value
+
+
+def atomic_savefig(fig, path: str | Path, **kwargs) -> Path:
+    """Save a matplotlib figure atomically (PNG unless the suffix says otherwise)."""
+    import io
+
+    buf = io.BytesIO()
+    fmt = Path(path).suffix.lstrip(".") or "png"
+    fig.savefig(buf, format=fmt, **({"dpi": 120, "bbox_inches": "tight"} | kwargs))
+    return atomic_write_bytes(path, buf.getvalue())
+
+
+def _jsonable(value):
+    try:
+        import numpy as np
+        if isinstance(value, np.generic):
+            return value.item()
+        if isinstance(value, np.ndarray):
+            return value.tolist()
+    except ImportError:          # pragma: no cover
+        pass
+    raise TypeError(f"not JSON serialisable: {type(value).__name__}")

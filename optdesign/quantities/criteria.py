@@ -1,0 +1,366 @@
+"""Objectives and constraints as objects: each owns its expression, its bounds and its check.
+
+One object per criterion states the same quantity twice over one interface: symbolically, over
+the NLP's named quantities (:class:`optdesign.solver.nlp.Quantities`: ``lengths``, ``ratio``,
+``worst_ripple``, ``peak_speed``, ``cos_mu_sq``), and exactly, over a :class:`Measured` view of
+an :class:`~optdesign.evaluation.figures.Evaluation` with the same names. The NLP, the verification, the
+start ranking and the reports iterate over :func:`constraints_of` and :func:`objective_of`; a
+new criterion is one class here (or in its mechanism or section) and nothing else.
+
+Convention, stated once: every constraint is ``lower <= value <= upper``; its bounds are
+computed anew for every solve (a Pareto sweep's ε is a bound, not a rebuild of the NLP).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Any, Mapping
+
+from optdesign.quantities import TurnQuantity, get_quantity, known, quantities_of
+from optdesign.quantities.bounds import QuantityBound
+
+#: weight of the worst ripple in the largest-ratio objective: a lexicographic tie-break that
+#: keeps w_hi and w_lo tight when the ripple cap is slack (the surrogate δ stays exact) for
+#: at most ~1e-6 of ratio
+RIPPLE_TIE_BREAK = 1e-6
+#: tolerances of the exact check: a constraint violated by less is taken as met
+TOL_ANGLE_DEG = 1e-3
+TOL_RATIO = 1e-7
+#: length constraints, relative to the design's longest length: 4e-5 mm at 400 mm, far below
+#: any manufacturing tolerance, and the same in any unit
+TOL_LENGTH_REL = 1e-7
+#: bounds on quantities, relative to the value (at least 1 in its unit)
+TOL_QUANTITY_REL = 1e-7
+
+
+@dataclass(frozen=True)
+class Measured:
+    """The NLP's named quantities, measured exactly on one evaluated design."""
+
+    lengths: Mapping[str, float]
+    ratio: float
+    worst_ripple: float
+    peak_speed: float                 # ω_max of the problem's stroke at e = 1, rad/s
+    min_angle_deg: float
+    evaluation: Any
+    #: the exact value of every quantity a bound or the objective of the problem names, by
+    #: the bound's key (:attr:`QuantityBound.key`)
+    quantities: Mapping[str, float] = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, problem, ev) -> "Measured":
+        lengths = {k: float(ev.design.values[k]) for k in problem.model.lengths}
+        listed = problem.eccentricities
+        return cls(lengths, ev.ratio, ev.ripple(problem.objective.ripple, listed),
+                   ev.figures.omega_max, ev.min_angle_deg, ev,
+                   measured_quantities(problem, ev))
+
+
+def quantity_specs(problem) -> list[QuantityBound]:
+    """The quantities the problem's criteria read beyond the envelope's own: its bounds on
+    quantities and its quantity objective, each once by key."""
+    specs = list(problem.constraints.quantities)
+    objective = objective_of(problem)
+    if isinstance(objective, QuantityObjective):
+        specs.append(QuantityBound(objective.quantity))
+    return list({s.key: s for s in specs}.values())
+
+
+def measured_quantities(problem, ev) -> dict[str, float]:
+    """The exact value of every :func:`quantity_specs` of ``problem`` on the evaluation."""
+    out = {}
+    ripple = problem.objective.ripple
+    for spec in quantity_specs(problem):
+        if spec.at is None:
+            out[spec.key] = quantities_of(ev, problem.eccentricities, ripple,
+                                          names=(spec.name,))["values"][spec.name]
+        else:
+            out[spec.key] = float(get_quantity(spec.name).exact(ev, spec.at, ripple))
+    return out
+
+
+# --------------------------------------------------------------------------- constraints
+class Constraint:
+    """``lower <= value(q) <= upper`` on the NLP's quantities and on a measured design."""
+
+    name: str = ""
+    unit: str = ""
+
+    def rows(self, q) -> list[tuple[str, Any]]:
+        """(block name, CasADi expression) pairs for the NLP."""
+        return [(self.name, self.value(q))]
+
+    def value(self, q):
+        raise NotImplementedError
+
+    def bounds(self, problem, tightening_deg: float = 0.0) -> tuple[float, float]:
+        raise NotImplementedError
+
+    def tolerance(self, m: Measured) -> float:
+        return TOL_RATIO
+
+    def bound_per_unit(self, problem, lower: bool) -> tuple[float, str]:
+        """How the NLP row's bound moves per unit of the designer's bound, and that unit:
+        IPOPT's multiplier of a row times this is d objective / d (the file's value)."""
+        return 1.0, self.unit or "-"
+
+    def violation(self, problem, m: Measured) -> float:
+        """How far the exact value lies outside the bounds (<= 0 when met)."""
+        lower, upper = self.bounds(problem)
+        v = self.value(m)
+        values = v if isinstance(v, (list, tuple)) else [v]
+        return max(max(lower - float(x), float(x) - upper) for x in values)
+
+
+class TransmissionAngle(Constraint):
+    """min(μ, 180° - μ) >= μ_min of every chain over the whole turn, as |cos μ| <= cos μ_min
+    at the NLP's exact extremes of cos μ (squared, so both toggle sides are one smooth row),
+    tightened by any deficit the exact check still finds; assembly with a margin,
+    1 - cos²μ >= m."""
+
+    name = "transmission_angle"
+    unit = "deg"
+
+    def rows(self, q):
+        return [(f"{self.name}[{tag}]", cos_sq) for tag, cos_sq in q.cos_mu_sq.items()]
+
+    def bounds(self, problem, tightening_deg=0.0):
+        c = problem.constraints
+        mu = min(c.min_transmission_angle_deg + tightening_deg, 89.0) \
+            if c.min_transmission_angle_deg > 0 else 0.0
+        return -math.inf, min(math.cos(math.radians(mu)) ** 2, 1.0 - c.assembly_margin)
+
+    def violation(self, problem, m):
+        return problem.constraints.min_transmission_angle_deg - m.min_angle_deg
+
+    def bound_per_unit(self, problem, lower):
+        """The row's bound is cos²μ_min: d cos²μ_min / dμ_min = -sin 2μ_min per radian."""
+        mu = math.radians(problem.constraints.min_transmission_angle_deg)
+        return -math.sin(2 * mu) * math.pi / 180.0, "deg"
+
+    def tolerance(self, m):
+        return TOL_ANGLE_DEG
+
+
+class RatioFloor(Constraint):
+    """ratio >= min_ratio (the ε of a Pareto sweep)."""
+
+    name = "min_ratio"
+
+    def value(self, q):
+        return q.ratio
+
+    def bounds(self, problem, tightening_deg=0.0):
+        return problem.objective.min_ratio, math.inf
+
+
+class RippleCap(Constraint):
+    """worst δ <= max_ripple, with the largest-ratio objective."""
+
+    name = "max_ripple"
+
+    def value(self, q):
+        return q.worst_ripple
+
+    def bounds(self, problem, tightening_deg=0.0):
+        return -math.inf, problem.objective.max_ripple
+
+
+class LengthConstraint(Constraint):
+    """A constraint on the lengths alone, with one formula for symbols and numbers:
+    ``formula(lengths)`` uses arithmetic only. Mechanisms contribute these."""
+
+    def __init__(self, name: str, formula, lower: float = 0.0, upper: float = math.inf,
+                 column: str | None = None, unit: str = "mm"):
+        self.name, self.formula, self.lower, self.upper = name, formula, lower, upper
+        self.column = column            # the result tables' column of this value, if any
+        self.unit = unit                # of the formula's value: mm, or "-" for a ratio
+
+    def value(self, q):
+        return self.formula(q.lengths)
+
+    def bounds(self, problem, tightening_deg=0.0):
+        return self.lower, self.upper
+
+    def tolerance(self, m):
+        return TOL_LENGTH_REL * max(abs(v) for v in m.lengths.values())
+
+
+class QuantityConstraint(Constraint):
+    """``lower <= value <= upper`` of a quantity (``constraints: {QUANTITY: {...}}``): the
+    NLP holds it at the quantity's epigraph, which bounds every tracked extreme
+    (:mod:`optdesign.solver.nlp`); the exact check reads the quantity's exact form."""
+
+    def __init__(self, spec: QuantityBound):
+        self.spec = spec
+        self.name = spec.key
+        self.unit = get_quantity(spec.name).unit
+        self.column = spec.key
+
+    def value(self, q):
+        return q.quantities[self.spec.key]
+
+    def bounds(self, problem, tightening_deg=0.0):
+        """The bound of ``problem``'s spec of this key (a Pareto point's ε moves it without
+        rebuilding the NLP)."""
+        spec = next((s for s in problem.constraints.quantities if s.key == self.spec.key),
+                    self.spec)
+        return spec.lower, spec.upper
+
+    def tolerance(self, m):
+        """Relative to the value: the NLP holds the bound to IPOPT's tolerance."""
+        return TOL_QUANTITY_REL * max(1.0, abs(float(self.value(m))))
+
+
+class SectionConstraint(Constraint):
+    """A constraint a problem-file section contributes (e.g. the driveline's speed limit):
+    the section gives the symbolic rows from the peak output speed and checks the design."""
+
+    def __init__(self, key: str, section, problem):
+        self.key, self.section, self.problem = key, section, problem
+        self.name = key
+
+    def rows(self, q):
+        return [(f"{self.key}.{name}", g) for name, g in
+                self.section.solve_constraints(self.problem, q.peak_speed)]
+
+    def bounds(self, problem, tightening_deg=0.0):
+        return 0.0, math.inf
+
+    def violation(self, problem, m):
+        return math.inf if self.section.verify(problem, m.evaluation) else -math.inf
+
+    def message(self, problem, m) -> str:
+        return self.section.verify(problem, m.evaluation) or ""
+
+
+def constraints_of(problem) -> list[Constraint]:
+    """Every constraint of a problem: the general ones, the mechanism's, the sections'."""
+    out: list[Constraint] = [TransmissionAngle(), RatioFloor()]
+    out += objective_of(problem).constraints(problem)
+    out += problem.model.criteria(problem.constraints, problem.options)
+    out += [QuantityConstraint(spec) for spec in problem.constraints.quantities]
+    for key, section in problem.sections.items():
+        if hasattr(section, "solve_constraints"):
+            out.append(SectionConstraint(key, section, problem))
+    return out
+
+
+# --------------------------------------------------------------------------- objectives
+class Objective:
+    """What the NLP minimises, and the key that ranks verified designs (lower is better)."""
+
+    name: str = ""
+    #: how the reports write the objective (in d OBJECTIVE / d bound)
+    symbol: str = ""
+    #: ``objective:`` keys this objective needs besides ``minimize``
+    requires: tuple[str, ...] = ()
+
+    def expression(self, q):
+        raise NotImplementedError
+
+    def constraints(self, problem) -> list[Constraint]:
+        """Constraints that come with this objective (e.g. the ripple cap of the largest
+        ratio)."""
+        return []
+
+    def rank(self, delta: float, ratio: float) -> float:
+        """The ranking key of a design with worst ripple ``delta`` and ratio ``ratio``."""
+        raise NotImplementedError
+
+    def key(self, m) -> float:
+        """The ranking key of a measured design (:class:`Measured`, exact) or of the
+        screening's sampled arrays (the same names)."""
+        return self.rank(m.worst_ripple, m.ratio)
+
+    def result_key(self, result) -> float:
+        """The ranking key of a count's optimum (a PhaseResult)."""
+        return self.rank(result.delta, result.ratio)
+
+
+class LeastRipple(Objective):
+    """The worst δ over the listed eccentricities."""
+
+    name = "ripple"
+    symbol = "δ"
+
+    def expression(self, q):
+        return q.worst_ripple
+
+    def rank(self, delta, ratio):
+        return delta
+
+
+class LargestRatio(Objective):
+    """The ratio, under the ripple cap; the worst δ breaks ties lexicographically."""
+
+    name = "-ratio"
+    symbol = "(-ratio)"
+
+    def expression(self, q):
+        return -q.ratio + RIPPLE_TIE_BREAK * q.worst_ripple
+
+    requires = ("max_ripple",)
+
+    def constraints(self, problem):
+        return [RippleCap()]
+
+    def rank(self, delta, ratio):
+        return -ratio
+
+
+class QuantityObjective(Objective):
+    """The worst of a quantity over the listed eccentricities: least when larger is worse
+    (``minimize: housing_radius``), largest when smaller is (``minimize: -swing``); the
+    worst δ breaks ties, as for the largest ratio."""
+
+    quantity: str = ""
+
+    @property
+    def sign(self) -> float:
+        return 1.0 if get_quantity(self.quantity).worst == "max" else -1.0
+
+    def expression(self, q):
+        return self.sign * q.quantities[self.quantity] + RIPPLE_TIE_BREAK * q.worst_ripple
+
+    def key(self, m):
+        return self.sign * m.quantities[self.quantity]
+
+    def result_key(self, result):
+        return self.sign * result.quantities["values"][self.quantity]
+
+
+def _quantity_objectives() -> dict[str, type[Objective]]:
+    """``minimize: NAME`` for every quantity tracked over the turn whose larger values are
+    worse, ``minimize: -NAME`` for those whose smaller ones are."""
+    return _objectives_of(known())
+
+
+@lru_cache(maxsize=8)
+def _objectives_of(names: tuple[str, ...]) -> dict[str, type[Objective]]:
+    out: dict[str, type[Objective]] = {}
+    for name in names:
+        q = get_quantity(name)
+        if isinstance(q, TurnQuantity):
+            key = name if q.worst == "max" else f"-{name}"
+            out[key] = type(f"Objective_{name}", (QuantityObjective,),
+                            {"quantity": name, "name": key,
+                             "symbol": name if q.worst == "max" else f"(-{name})",
+                             "__doc__": f"{'Least' if q.worst == 'max' else 'Largest'} "
+                                        f"{q.label}."})
+    return out
+
+
+#: the objectives ``objective.minimize`` may name besides the quantities' own
+OBJECTIVES: dict[str, type[Objective]] = {"ripple": LeastRipple, "-ratio": LargestRatio}
+
+
+def objectives() -> dict[str, type[Objective]]:
+    """Every name ``objective.minimize`` takes: :data:`OBJECTIVES` and one per quantity
+    tracked over the turn (the registry as it is now)."""
+    return OBJECTIVES | _quantity_objectives()
+
+
+def objective_of(problem) -> Objective:
+    return objectives()[problem.objective.minimize]()

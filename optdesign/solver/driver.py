@@ -1,0 +1,707 @@
+"""Screen, polish the best basins with IPOPT, verify exactly: every admissible phase count.
+
+Per phase count: one NLP is built (:class:`~optdesign.solver.nlp.PhaseNLP`) and reused by every
+start, refinement and Pareto point; the box is screened (:mod:`optdesign.solver.screening`)
+and the best basins are polished by IPOPT; every optimum is re-verified exactly
+(:mod:`optdesign.solver.verify`) and re-solved while its exact structure disagrees with the
+NLP's (hand-over order, an angle on its window, the transmission angle dipping between
+samples), while the worst eccentricity inside a regulation interval is not held (it is then
+held in an eccentricity slot, :func:`next_held`), and in a robust solve while the tolerance
+box's worst parts are not held (scenario slots, :mod:`optdesign.solver.robust`). The best
+verified design wins.
+"""
+from __future__ import annotations
+
+import time
+from contextlib import contextmanager
+from dataclasses import asdict, dataclass, replace
+
+import numpy as np
+
+from optdesign.quantities.criteria import objective_of, quantity_specs
+from optdesign.envelope.sampled import STROKE_SIGNS
+from optdesign.quantities import design_quantities
+from optdesign.evaluation.sensitivity import sensitivity_record
+from optdesign.solver.accuracy import solve_accuracy
+from optdesign.solver.nlp import SECONDARY_BUDGET, Held, PhaseNLP, is_robust
+from optdesign.solver.result import PhaseResult, SolveResult, StartRecord
+from optdesign.solver.robust import next_scenarios, robust_verdict, worst_cases
+from optdesign.solver.screening import line_seeds, screen
+from optdesign.solver.verify import TOL_ANGLE_DEG, Verification, start_guess, verify
+
+SUCCESS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+#: the status of a run stopped because it entered a known optimum's neighbourhood
+JOINED = "Joined_Known_Basin"
+#: the status of a run stopped while still far from feasible (nlp.STALL_AFTER iterations)
+STALLED = "Stalled_Infeasible"
+#: the status of a secondary basin's polish stopped at its budget (nlp.SECONDARY_BUDGET)
+EXHAUSTED = "Secondary_Budget_Exhausted"
+MAX_REFINEMENTS = 4
+#: re-solves with new held eccentricities (a regulation interval), besides MAX_REFINEMENTS
+MAX_REGULATION_STEPS = 6
+#: the worst δ inside the interval may exceed the held eccentricities' worst by this much
+REGULATION_TOL = 1e-8
+#: a new worst eccentricity this close (share of the interval) to a held one moves that slot
+SAME_SLOT = 0.05
+#: re-solves with new scenario parts (a robust solve), besides MAX_REFINEMENTS
+MAX_ROBUST_STEPS = 6
+ANGLE_SAFETY_DEG = 0.01
+#: two polished optima are one basin when their designs differ by less than this (relative
+#: to the box) and their objectives by less than SAME_KEY_REL
+SAME_DESIGN = 1e-4
+SAME_KEY_REL = 1e-6
+
+
+@dataclass
+class Timings:
+    """Wall time per stage, seconds."""
+
+    build: float = 0.0
+    screening: float = 0.0
+    ipopt: float = 0.0
+    verification: float = 0.0
+
+    @contextmanager
+    def stage(self, name: str):
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            setattr(self, name, getattr(self, name) + time.perf_counter() - t0)
+
+    def add(self, other: "Timings") -> None:
+        for k, v in other.to_dict().items():
+            setattr(self, k, getattr(self, k) + v)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+#: the IPOPT status of a known design taken as it is (:meth:`PhaseSolver.as_it_is`)
+AS_IT_IS = "Known_Design_As_It_Is"
+
+
+@dataclass
+class Outcome:
+    """What one polish returns: the IPOPT record, the exact verification of the design it
+    ended on, that design's values, and the surrogate's worst δ there."""
+
+    record: StartRecord
+    verification: Verification
+    values: dict
+    surrogate: float | None
+
+
+class PhaseSolver:
+    """Solves the NLP of one phase count from any start, on NLPs built once and kept."""
+
+    def __init__(self, problem, count: int):
+        self.problem = problem
+        self.count = count
+        self.timings = Timings()
+        self._nlps: dict[int, PhaseNLP] = {}
+        #: optima found already: a run that reaches one of them is stopped (its basin is known)
+        self.avoid: list[dict] = []
+
+    def nlp(self, sequences) -> PhaseNLP:
+        """The NLP with enough hand-over slots for ``sequences`` (built at most once)."""
+        need = max((len(s) for s in sequences), default=1)
+        for slots, nlp in self._nlps.items():
+            if slots >= need:
+                return nlp
+        curves = self.count * len(STROKE_SIGNS[self.problem.stroke])
+        with self.timings.stage("build"):       # a slot per curve, more if the design has more
+            nlp = PhaseNLP(self.problem, self.count, max(need, curves))
+        self._nlps[nlp.slots] = nlp
+        return nlp
+
+    def verify(self, problem, values, held: Held | None = None,
+               search: bool = True) -> Verification:
+        with self.timings.stage("verification"):
+            return verify(problem, values, held, search)
+
+    def solve_from(self, values: dict, min_ratio=None, max_ripple=None,
+                   ver: Verification | None = None, secondary: bool = False,
+                   bound=None) -> Outcome:
+        """IPOPT from one start; refined until the exact check agrees with the NLP's structure.
+
+        ``min_ratio``, ``max_ripple`` and ``bound`` (a QuantityBound, tightening the problem's
+        own bound of that quantity) move bounds for this solve only, as a Pareto point's ε.
+        A quasi-Newton run that stalls (or runs out of iterations) is retried once with the
+        exact Hessian, unless the start is ``secondary`` (a further basin polished beside the
+        best one: a stalled run there is abandoned, not rescued)."""
+        problem = self.at(min_ratio, max_ripple, bound)
+        # a start is checked at the listed eccentricities only; the first polish's result is
+        # searched over the whole regulation interval
+        ver = ver or self.verify(problem, values, search=False)
+        start, t0 = dict(values), time.perf_counter()
+        robust = is_robust(problem)
+        if robust and ver.sequences and not any(ver.held.scenario_active):
+            # the nominal and the start's worst parts (tolerance analysis) to begin with
+            cases, corners = self.worst_cases(problem, values)
+            seeded = next_scenarios(problem, ver.held, cases, None, corners)
+            ver = self.verify(problem, values, seeded, search=False)
+        held = ver.held
+        # The NLP holds the worst transmission angle at exact points: no margin to start with;
+        # a dip the exact check still finds tightens the bound by the deficit.
+        iterations, status, surrogate, multiplier, note = 0, "not run", None, None, ""
+        active: list = []
+        tightening, hessian = 0.0, problem.solver.hessian
+        refinements = regulation_steps = robust_steps = 0
+        while refinements < MAX_REFINEMENTS:
+            refinements += 1
+            if not ver.sequences:
+                note = ver.message
+                break
+            run = self._ipopt(problem, ver, tightening, hessian,
+                              SECONDARY_BUDGET - iterations if secondary else None)
+            status, surrogate, multiplier, active = (run.status, run.surrogate,
+                                                     run.multiplier, run.active)
+            iterations += run.iterations
+            trial = values | run.lengths
+            new = self.verify(problem, trial, held)
+            if status == "Maximum_Iterations_Exceeded" and hessian == "limited-memory" \
+                    and not secondary:
+                # The quasi-Newton run stalled: once more from the same start with CasADi's
+                # exact Hessian, which converges, or certifies local infeasibility, where
+                # L-BFGS wanders.
+                hessian = "exact"
+                continue
+            if status == STALLED:
+                note = f"still infeasible after {run.iterations} iterations"
+                break
+            if status == EXHAUSTED:
+                note = f"a secondary basin not converged in {SECONDARY_BUDGET} iterations"
+                break
+            if status == JOINED:
+                note = "joined the basin of an optimum found from another start"
+                break
+            if status not in SUCCESS:
+                note = run.binding
+                values, ver = (trial, new) if new.sequences else (values, ver)
+                break
+            given, (values, ver) = ver.sequences, (trial, new)
+            moved = next_held(problem, ver)
+            if moved != held:
+                if regulation_steps < MAX_REGULATION_STEPS:
+                    # the worst inside the regulation interval is not held: hold it (a
+                    # parameter of the NLP) and re-solve from here
+                    regulation_steps += 1
+                    refinements -= 1
+                    held = moved
+                    ver = self.verify(problem, values, held)
+                    continue
+                note = (f"the worst eccentricity {ver.worst_eccentricity:g} of the interval "
+                        f"still moved after {MAX_REGULATION_STEPS} re-solves")
+            if "transmission_angle" in ver.violations:
+                tightening += ver.violations["transmission_angle"] + ANGLE_SAFETY_DEG
+                continue
+            if any(spec.key in ver.violations for spec in quantity_specs(problem)):
+                continue        # another extreme than the tracked one became the largest
+            if not _same_cycles(ver.sequences, given) or run.at_window:
+                continue        # hand-overs changed order, or an angle ran to its window
+            if robust:
+                # the tolerance box's worst parts of this optimum: a part rougher than the
+                # bound t, or one that breaks the angle, becomes a scenario; re-solve
+                ver.worst_cases, ver.corners = self.worst_cases(problem, values)
+                grown = next_scenarios(problem, held, ver.worst_cases, surrogate, ver.corners)
+                if grown != held and robust_steps < MAX_ROBUST_STEPS:
+                    robust_steps += 1
+                    refinements -= 1
+                    held = grown
+                    ver = self.verify(problem, values, held)
+                    continue
+            break
+        if robust:
+            with self.timings.stage("verification"):
+                robust_verdict(problem, values, ver)
+        record = StartRecord(start=start, ipopt_status=status, iterations=iterations,
+                             time_s=time.perf_counter() - t0,
+                             feasible=bool(ver.feasible and status in SUCCESS),
+                             delta=ver.delta, note=note, ratio_multiplier=multiplier,
+                             active=active if status in SUCCESS else [])
+        return Outcome(record, ver, values, surrogate)
+
+    def at(self, min_ratio=None, max_ripple=None, bound=None):
+        """The problem with a Pareto point's bounds (see :meth:`solve_from`)."""
+        problem = self.problem
+        if min_ratio is not None or max_ripple is not None:
+            obj = replace(problem.objective,
+                          min_ratio=problem.objective.min_ratio if min_ratio is None else min_ratio,
+                          max_ripple=problem.objective.max_ripple if max_ripple is None
+                          else max_ripple)
+            problem = replace(problem, objective=obj)
+        if bound is not None:
+            problem = tightened(problem, bound)
+        return problem
+
+    def as_it_is(self, values: dict, min_ratio=None, max_ripple=None, bound=None) -> Outcome:
+        """``values`` verified exactly under the point's bounds, without a polish: a known
+        design that meets them is itself a candidate for the point (IPOPT from it may end in
+        a worse local optimum)."""
+        problem = self.at(min_ratio, max_ripple, bound)
+        ver = self.verify(problem, values)
+        record = StartRecord(start=dict(values), ipopt_status=AS_IT_IS, iterations=0,
+                             time_s=0.0, feasible=bool(ver.feasible), delta=ver.delta,
+                             note="the start itself, verified under the point's bounds")
+        return Outcome(record, ver, dict(values), None)
+
+    def worst_cases(self, problem, values) -> tuple:
+        """The tolerance analysis of ``values`` (:func:`optdesign.solver.robust.worst_cases`)."""
+        with self.timings.stage("verification"):
+            return worst_cases(problem, values)
+
+    def _ipopt(self, problem, ver: Verification, tightening: float, hessian: str,
+               budget: int | None = None) -> "_Run":
+        """One IPOPT run on the NLP from the verified design ``ver`` (stopped after ``budget``
+        iterations when one is given)."""
+        nlp = self.nlp(ver.sequences)
+        guess = start_guess(nlp, ver)
+        lbx, ubx = nlp.bounds(guess, ver.sequences, ver.held)
+        params = nlp.parameters(ver.sequences, ver.held)
+        lbg, ubg = nlp.constraint_bounds(problem, ver.sequences, tightening, ver.held, guess)
+        with self.timings.stage("build"):
+            solver = nlp.solver(hessian)
+        nlp.watch.start([np.array([v[k] for k in nlp.free]) / nlp.scale for v in self.avoid],
+                        lbg, ubg, None if budget is None else max(budget, 1))
+        with self.timings.stage("ipopt"):
+            sol = solver(x0=nlp.start(guess, lbx, ubx, params), lbx=lbx, ubx=ubx, lbg=lbg,
+                         ubg=ubg, p=params)
+        stats = solver.stats()
+        x = np.array(sol["x"]).ravel()
+        joined = nlp.watch.joined
+        status = JOINED if joined else STALLED if nlp.watch.stalled else \
+            EXHAUSTED if nlp.watch.exhausted else stats["return_status"]
+        return _Run(status=status,
+                    iterations=int(stats["iter_count"]),
+                    lengths=nlp.lengths_of(x), surrogate=nlp.worst_ripple(x, params, ver.held),
+                    multiplier=nlp.multiplier(sol["lam_g"], "min_ratio"),
+                    at_window=nlp.at_window_bound(x, lbx, ubx),
+                    binding="" if joined else nlp.binding(np.array(sol["g"]).ravel(), lbg, ubg),
+                    active=nlp.active_set(problem, x, sol["lam_x"], sol["lam_g"], lbx, ubx))
+
+
+@dataclass
+class _Run:
+    """What one IPOPT run returned, read off the NLP by name."""
+
+    status: str
+    iterations: int
+    lengths: dict
+    surrogate: float
+    multiplier: float
+    at_window: bool
+    binding: str
+    active: list            # what binds at the solution, with d objective / d bound
+
+
+class _Polishing:
+    """The polishes of one phase count: their records, the distinct optima, the best."""
+
+    def __init__(self, problem, count: int, solver: PhaseSolver, result: PhaseResult,
+                 workers: int = 1):
+        self.problem, self.count, self.solver, self.result = problem, count, solver, result
+        self.workers = workers
+        self.best: Outcome | None = None
+        self.optima: list[Outcome] = []
+        self.polished = 0
+        self.improved_at = 0          # the polish that last improved on the best
+
+    def polish(self, values: dict) -> Outcome:
+        self.solver.avoid = [o.values for o in self.optima]
+        try:
+            outcome = self.solver.solve_from(dict(values), secondary=self.best is not None)
+        finally:
+            self.solver.avoid = []
+        return self.record(outcome)
+
+    def record(self, outcome: Outcome) -> Outcome:
+        self.polished += 1
+        self.result.starts.append(outcome.record)
+        self.result.iterations += outcome.record.iterations
+        if outcome.record.feasible:
+            if not any(_same_optimum(self.problem, outcome, o) for o in self.optima):
+                self.optima.append(outcome)
+            if self.best is None or outcome.verification.key < self.best.verification.key:
+                if self.best is None or not _same_optimum(self.problem, outcome, self.best):
+                    self.improved_at = self.polished
+                self.best = outcome
+        return outcome
+
+    def apart(self) -> bool:
+        """Whether the polishes so far ended apart: more than one optimum, or a polish that
+        reached none (stalled, out of budget, infeasible). A count whose best basins lead to
+        different places is multimodal, and its next basins are worth polishing."""
+        return len(self.optima) > 1 or any(
+            not r.feasible or r.ipopt_status not in SUCCESS + (JOINED,)
+            for r in self.result.starts)
+
+    def basins(self, seeds) -> None:
+        """Polish the best basins' seeds: `basins` of them once one is feasible; with none
+        feasible, on until `agree + 1` IPOPT verdicts of local infeasibility on one constraint
+        (or `starts` polishes). Where the polishes end :meth:`apart`, on through the next
+        basins until `basins` polishes in a row bring no better optimum (the screening's rank
+        of a basin is the sampled value of its seed, not of its bottom, so the best basin may
+        rank third or fourth)."""
+        s = self.problem.solver
+        seeds = list(seeds)
+        together = min(s.basins, s.starts, len(seeds), self.workers)
+        if together > 1:        # the best basins at once, one process each
+            runs = _in_parallel(self.problem, self.count, [c.values for c in seeds[:together]])
+            for outcome, timings in runs:
+                self.record(outcome)
+            for stage in ("build", "ipopt", "verification"):
+                setattr(self.solver.timings, stage, getattr(self.solver.timings, stage) +
+                        max(getattr(t, stage) for _, t in runs))
+            seeds = seeds[together:]
+        for seed in seeds:
+            if self.polished >= s.starts:
+                return
+            if self.best is not None and self.polished >= s.basins and (
+                    not self.apart() or
+                    self.polished - max(self.improved_at, s.basins) >= s.basins):
+                return           # agreed, or `basins` more polishes found nothing better
+            outcome = self.polish(seed.values)
+            verdicts = [r.note for r in self.result.starts
+                        if r.ipopt_status == "Infeasible_Problem_Detected"]
+            if self.best is None and outcome.record.note and \
+                    verdicts.count(outcome.record.note) >= s.agree + 1:
+                return
+
+    def lines(self) -> None:
+        """Line screening through the best optimum: a basin beside its face is polished while
+        it improves on the best (within the polish budget)."""
+        tried: list[dict] = []
+        while self.best is not None and self.polished < self.problem.solver.starts:
+            with self.solver.timings.stage("screening"):
+                beside = [c for c in line_seeds(self.problem, self.count, self.best.values)
+                          if not any(_close(self.problem, c.values, t) for t in tried)]
+            if not beside:
+                return
+            tried.append(beside[0].values)
+            before = self.best.verification.key
+            self.polish(beside[0].values)
+            if self.best.verification.key >= before - SAME_KEY_REL * max(1e-3, abs(before)):
+                return
+
+
+def _in_parallel(problem, count: int, starts: list[dict]) -> list[tuple[Outcome, Timings]]:
+    """Polish each start in a process of its own (forked: nothing to import again; each
+    builds its NLP, a fraction of a second; each ends if this process dies); the outcomes
+    and each process's stage times."""
+    import multiprocessing as mp
+    import os
+    from concurrent.futures import ProcessPoolExecutor
+
+    from optdesign.lifetime import die_with_parent
+
+    pool = ProcessPoolExecutor(len(starts), mp_context=mp.get_context("fork"),
+                               initializer=die_with_parent, initargs=(os.getpid(),))
+    try:
+        return list(pool.map(_polish_alone, [(problem, count, v, i > 0)
+                                             for i, v in enumerate(starts)]))
+    except BaseException:       # Ctrl-C (the workers ignore it) or an error: end them now
+        for proc in list((getattr(pool, "_processes", None) or {}).values()):
+            proc.terminate()
+        raise
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _polish_alone(job) -> tuple[Outcome, Timings]:
+    problem, count, values, secondary = job
+    solver = PhaseSolver(problem, count)
+    return solver.solve_from(dict(values), secondary=secondary), solver.timings
+
+
+def workers_for(problem) -> int:
+    """Processes for the polishes: ``solver.workers``, or (0) every core, where the platform
+    can fork."""
+    import multiprocessing as mp
+    import os
+
+    if "fork" not in mp.get_all_start_methods():
+        return 1
+    return problem.solver.workers or os.cpu_count() or 1
+
+
+def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
+                workers: int | None = None, neighbours: list[dict] = ()) -> PhaseResult:
+    """Best verified optimum of one phase count: screen, then polish the best basins (in
+    ``workers`` processes at once; default :func:`workers_for`; 1 with a given ``solver``,
+    whose built NLPs are kept for re-use). ``neighbours``: optima of other phase counts,
+    screened with the box (continuation: the optimum of n - 1 often lies in the best basin
+    of n, and ranks first when it does)."""
+    if not problem.free_lengths():
+        fixed = _fixed_infeasible(problem, count)
+        if fixed is not None:
+            return fixed
+    out_of_reach = _beyond_the_box(problem, count)
+    if out_of_reach is not None:
+        return out_of_reach
+    if workers is None:
+        workers = 1 if solver is not None else workers_for(problem)
+    solver = solver or PhaseSolver(problem, count)
+    with solver.timings.stage("screening"):
+        screening = screen(problem, count, problem.solver.screen, extra=list(neighbours))
+    result = PhaseResult(count, "failed", screening=screening.to_dict())
+    work = _Polishing(problem, count, solver, result, workers)
+    work.basins(screening.seeds)
+    work.lines()
+    result.screening |= {"polished": work.polished, "distinct_optima": len(work.optima)}
+    result.timings = solver.timings.to_dict()
+    if work.best is not None:
+        return _fill(result, problem, work.best)
+    if not screening.seeds:
+        result.status, result.binding = "infeasible", "assembly"
+        result.message = (f"no design within the bounds assembles at every listed "
+                          f"eccentricity with {count} phases")
+        return result
+    result = _no_optimum(result)
+    if result.binding == "min_ratio" and problem.objective.min_ratio > 0:
+        _reachable_ratio(problem, count, result)
+    return result
+
+
+#: the ripple cap of the largest-ratio solve that tells how far a ratio floor is out of reach
+LOOSE_RIPPLE = 10.0
+
+
+def _reachable_ratio(problem, count: int, result: PhaseResult) -> None:
+    """The ratio floor binds and no start met it: the largest ratio any design in the bounds
+    reaches (the same constraints, the floor dropped, the ratio maximised), so the verdict
+    says by how much; below the floor it is ``infeasible``, with that value."""
+    free = replace(problem, objective=replace(problem.objective, minimize="-ratio",
+                                              min_ratio=0.0, max_ripple=LOOSE_RIPPLE,
+                                              robust="none"))
+    best = solve_phase(free, count, workers=1)
+    if best.status != "optimal":
+        return
+    if best.ratio < problem.objective.min_ratio:
+        result.status = "infeasible"
+        result.message = (f"min_ratio {problem.objective.min_ratio:g} is out of reach: the "
+                          f"largest ratio any design in the bounds reaches with {count} phases "
+                          f"is {best.ratio:.6g} (verified), under every other constraint")
+    else:
+        result.message += (f"; a design in the bounds reaches ratio {best.ratio:.6g}: more "
+                           f"starts (solver.starts, solver.screen) may find it")
+
+
+def tightened(problem, bound):
+    """``problem`` with its bound of ``bound``'s quantity (at the same eccentricity)
+    intersected with ``bound``."""
+    specs, found = [], False
+    for spec in problem.constraints.quantities:
+        if spec.key == bound.key:
+            spec = replace(spec, lower=max(spec.lower, bound.lower),
+                           upper=min(spec.upper, bound.upper))
+            found = True
+        specs.append(spec)
+    if not found:
+        specs.append(bound)
+    return replace(problem, constraints=replace(problem.constraints, quantities=tuple(specs)))
+
+
+def _no_optimum(result: PhaseResult) -> PhaseResult:
+    """Infeasible only on IPOPT's word; polishes that ran out of iterations prove nothing."""
+    verdicts = [r.note for r in result.starts
+                if r.note and r.ipopt_status == "Infeasible_Problem_Detected"]
+    notes = verdicts or [r.note for r in result.starts if r.note]
+    statuses = {r.ipopt_status for r in result.starts}
+    result.status = "infeasible" if "Infeasible_Problem_Detected" in statuses else "failed"
+    result.binding = max(set(notes), key=notes.count) if notes else None
+    result.message = (f"no start reached a verified feasible optimum (IPOPT: "
+                      f"{', '.join(sorted(statuses))})"
+                      + (f"; binding: {result.binding}" if result.binding else ""))
+    return result
+
+
+def next_held(problem, ver: Verification) -> Held:
+    """The eccentricity slots for the next solve of a design verified with ``ver.held``: the
+    same, unless the worst δ inside the regulation interval exceeds the worst at the held
+    eccentricities (the listed ones and the active slots) by more than REGULATION_TOL, or the
+    least transmission angle inside it breaks the bound where no held eccentricity sees it;
+    then that eccentricity is held: in the slot of a held one close to it, else in an idle
+    slot, else in place of the held slot of least δ."""
+    held, ev = ver.held, ver.evaluation
+    if not held.eccentricities or ev is None or ev.worst is None:
+        return held
+    worst, definition = ev.worst, problem.objective.ripple
+    lower, upper = problem.eccentricity_range
+    n_fixed = len(ev.per_e) - len(held.eccentricities)
+    rows = [(x.eccentricity, x.figures[ev.stroke].ripple(definition), x.min_angle_deg)
+            for i, x in enumerate(ev.per_e)
+            if (i < n_fixed and x.eccentricity in problem.eccentricities)
+            or (i >= n_fixed and held.active[i - n_fixed])]
+    wanted = []
+    if worst.interior(worst.eccentricity) and \
+            worst.delta > max(r[1] for r in rows) + REGULATION_TOL:
+        wanted.append((worst.eccentricity, worst.delta))
+    bound = problem.constraints.min_transmission_angle_deg
+    if worst.interior(worst.angle_eccentricity) and \
+            worst.min_angle_deg < bound - TOL_ANGLE_DEG and \
+            worst.min_angle_deg < min(r[2] for r in rows) - TOL_ANGLE_DEG:
+        wanted.append((worst.angle_eccentricity, worst.points[worst.angle_eccentricity][0]))
+    if not wanted:
+        return held
+    es, active = list(held.eccentricities), list(held.active)
+    deltas = [ev.per_e[n_fixed + j].figures[ev.stroke].ripple(definition)
+              for j in range(len(es))]
+    placed: set[int] = set()
+    for e, delta in wanted:
+        near = [j for j in range(len(es)) if active[j] and j not in placed
+                and abs(es[j] - e) <= SAME_SLOT * (upper - lower)]
+        idle = [j for j in range(len(es)) if not active[j] and j not in placed]
+        others = sorted((j for j in range(len(es)) if j not in placed), key=lambda j: deltas[j])
+        j = (near or idle or others or [None])[0]
+        if j is None:
+            break
+        es[j], active[j], deltas[j] = e, True, delta
+        placed.add(j)
+    return Held(tuple(es), tuple(active))
+
+
+def _same_cycles(a, b) -> bool:
+    """The hand-over sequences of every eccentricity are the same cycles: equal up to where
+    the turn starts (a hand-over that moved across φ = 0 changes the first curve of the
+    list, not the NLP's structure)."""
+    def rotations(seq):
+        return {tuple(seq[i:]) + tuple(seq[:i]) for i in range(len(seq))} or {()}
+
+    return len(a) == len(b) and all(tuple(x) in rotations(y) for x, y in zip(a, b))
+
+
+def _close(problem, a: dict, b: dict, share: float = 1e-3) -> bool:
+    """Every free length of ``a`` and ``b`` within ``share`` of its box."""
+    return all(abs(a[k] - b[k]) <= share * (problem.design[k].upper - problem.design[k].lower)
+               for k in problem.free_lengths())
+
+
+def _same_optimum(problem, a: Outcome, b: Outcome) -> bool:
+    ka, kb = a.verification.key, b.verification.key
+    return _close(problem, a.values, b.values, SAME_DESIGN) and \
+        abs(ka - kb) <= SAME_KEY_REL * max(1e-3, abs(kb))
+
+
+def _beyond_the_box(problem, count: int) -> PhaseResult | None:
+    """A length constraint no design in the bounds can meet, decided from the bounds alone:
+    a formula linear in the lengths (the four-bar's pin radius, l2 − l2′) takes its extremes
+    over the box at its corners, so a bound beyond them is ``infeasible`` with the reachable
+    value, before any solve."""
+    import itertools
+
+    import casadi as ca
+
+    from optdesign.quantities.criteria import LengthConstraint, constraints_of
+
+    names = list(problem.model.lengths)
+    sym = ca.SX.sym("l", len(names))
+    box = [(problem.design[k].lower, problem.design[k].upper) if problem.design[k].is_free
+           else (problem.design[k].value,) * 2 for k in names]
+    for c in constraints_of(problem):
+        if not isinstance(c, LengthConstraint):
+            continue
+        expr = c.formula({k: sym[i] for i, k in enumerate(names)})
+        if ca.depends_on(ca.jacobian(expr, sym), sym):
+            continue                            # not linear: its extremes need not be corners
+        f = ca.Function("f", [sym], [expr])
+        values = [float(f(corner)) for corner in itertools.product(*box)]
+        lower, upper = c.bounds(problem)
+        most, least = max(values), min(values)
+        if most < lower or least > upper:
+            side, reach = ("least", lower) if most < lower else ("most", upper)
+            value = most if most < lower else least
+            unit = "" if c.unit in ("", "-") else f" {c.unit}"
+            return PhaseResult(
+                count, "infeasible", binding=c.name,
+                message=f"{c.name} must be at {side} {reach:g}{unit}, and no design in the "
+                        f"bounds reaches it: the {'largest' if most < lower else 'least'} "
+                        f"{c.name} the bounds allow is {value:g}{unit}")
+    return None
+
+
+def _fixed_infeasible(problem, count: int) -> PhaseResult | None:
+    """Every length fixed and the exact check fails: nothing for IPOPT to move, so say which
+    constraint the design violates (instead of IPOPT failing on the NLP's inner variables)."""
+    values = problem.start_values() | {problem.model.count_variable: count}
+    ver = verify(problem, values)
+    if ver.feasible:
+        return None
+    names = ", ".join(ver.violations)
+    return PhaseResult(count, "infeasible", binding=next(iter(ver.violations), None),
+                       message=f"the fixed design violates {names}"
+                               + (f" ({ver.message})" if ver.message else ""))
+
+
+def _fill(result: PhaseResult, problem, outcome: Outcome) -> PhaseResult:
+    ver, values = outcome.verification, outcome.values
+    design = {k: float(values[k]) for k in problem.model.lengths}
+    design[problem.model.count_variable] = result.phases
+    result.status = "optimal"
+    result.design = design
+    result.delta = ver.delta
+    result.ratio = ver.ratio
+    result.min_transmission_angle_deg = ver.min_angle_deg
+    result.surrogate_delta = outcome.surrogate
+    # the NLP's t bounds the worst held part: compared with the box's worst in a robust solve
+    reference = ver.worst_cases[0].value if ver.worst_cases else ver.delta
+    result.surrogate_gap = None if outcome.surrogate is None else outcome.surrogate - reference
+    result.regulation = ver.regulation()
+    result.worst_eccentricity = ver.worst_eccentricity
+    if ver.worst_cases:
+        ripple, angle = ver.worst_cases
+        result.worst_case_delta = ripple.value
+        result.worst_case_min_transmission_angle_deg = angle.value
+    result.active = outcome.record.active
+    result.sensitivities = sensitivity_record(problem, design, ver.evaluation)
+    result.quantities = design_quantities(problem, ver.evaluation)
+    result.message = ""
+    return result
+
+
+def solve(problem, progress=None) -> SolveResult:
+    """Solve the problem for every admissible phase count and pick the best verified one."""
+    t0 = time.perf_counter()
+    per_phase = []
+    for n in problem.counts():
+        neighbours = [p.design for p in per_phase[-1:] if p.status == "optimal"]
+        per_phase.append(solve_phase(problem, n, neighbours=neighbours))
+        if progress:
+            progress()
+    ok = [p for p in per_phase if p.status == "optimal"]
+    objective = objective_of(problem)
+    if is_robust(problem):      # a robust solve ranks by the tolerance box's worst δ
+        best = min(ok, key=lambda p: p.worst_case_delta, default=None)
+    else:
+        best = min(ok, key=objective.result_key, default=None)
+    if best:
+        status, message = "optimal", ""
+    else:
+        status = "infeasible" if all(p.status == "infeasible" for p in per_phase) else "failed"
+        message = "; ".join(f"n={p.phases}: {p.message}" for p in per_phase)
+    timings = Timings()
+    for p in per_phase:
+        timings.add(Timings(**p.timings) if p.timings else Timings())
+    with timings.stage("verification"):
+        accuracy = solve_accuracy(problem, best)        # inside solve_time_s: part of the solve
+    return SolveResult(
+        name=problem.name, status=status,
+        design=best.design if best else None,
+        delta=best.delta if best else None,
+        ratio=best.ratio if best else None,
+        min_transmission_angle_deg=best.min_transmission_angle_deg if best else None,
+        worst_eccentricity=best.worst_eccentricity if best else None,
+        worst_case_delta=best.worst_case_delta if best else None,
+        quantities=best.quantities if best else {},
+        solve_time_s=time.perf_counter() - t0,
+        iterations=sum(p.iterations for p in per_phase),
+        per_phase=per_phase,
+        objective={"minimize": problem.objective.minimize, "ripple": problem.objective.ripple,
+                   "min_ratio": problem.objective.min_ratio,
+                   "max_ripple": problem.objective.max_ripple,
+                   "eccentricities": list(problem.eccentricities),
+                   **({"eccentricity_range": list(problem.eccentricity_range)}
+                      if problem.eccentricity_range is not None else {})},
+        accuracy=accuracy, active=best.active if best else [],
+        message=message, stroke=problem.stroke, mechanism=problem.mechanism,
+        input_speed=problem.input_speed, timings_s=timings.to_dict())

@@ -1,0 +1,92 @@
+"""The plain-text account of a solve (the files themselves: :func:`optdesign.commands.files.write_solve`)."""
+from __future__ import annotations
+
+from optdesign.quantities.criteria import objective_of, quantity_specs
+from optdesign.quantities import get_quantity
+
+
+def summary_text(result, problem) -> str:
+    """A short plain-text account of a solve, for the terminal and summary.txt."""
+    from optdesign.evaluation.sensitivity import sensitivity_line
+    from optdesign.outputs.units import gear_ratio_text
+
+    lines = [f"{problem.name}: {result.status} ({problem.mechanism}, {problem.stroke} stroke, "
+             f"ω1 = {problem.input_speed:g} rad/s)"]
+    if result.design:
+        lengths = set(problem.model.lengths)
+        lines.append("design: " + ", ".join(f"{k} = {v:.4f} mm" if k in lengths else
+                                            f"{k} = {v:g}" for k, v in result.design.items()))
+        where = f"e = {', '.join(f'{e:g}' for e in problem.eccentricities)}"
+        if problem.eccentricity_range is not None and result.worst_eccentricity is not None:
+            lower, upper = problem.eccentricity_range
+            where = f"e in [{lower:g}, {upper:g}], at e = {result.worst_eccentricity:.4f}"
+        lines.append(f"δ ({problem.objective.ripple}, worst over {where}) = "
+                     f"{result.delta:.6f}; ratio = {result.ratio:.6f} (output/input speed; "
+                     f"gear ratio i = 1/ratio = {gear_ratio_text(result.ratio)}); least "
+                     f"transmission angle = {result.min_transmission_angle_deg:.2f} deg")
+        values = (result.quantities or {}).get("values", {})
+        named = [spec for spec in quantity_specs(problem) if spec.key in values]
+        if named:
+            lines.append("quantities: " + "; ".join(
+                f"{spec.key} = {values[spec.key]:.6g}"
+                f"{'' if get_quantity(spec.name).unit == '-' else ' ' + get_quantity(spec.name).unit}"
+                for spec in named) + " (worst over the listed eccentricities)")
+        if result.worst_case_delta is not None:
+            lines.append(f"robust: the worst part of the tolerance box has δ = "
+                         f"{result.worst_case_delta:.6f} (the objective); every part "
+                         f"assembles and keeps every constraint")
+        lines.append(binding_text(result.active, problem))
+        lines.append(sensitivity_line(result.sensitivities))
+        lines += bound_warnings(result, problem)
+    else:
+        lines.append(result.message)
+    lines.append(f"solve time {result.solve_time_s:.2f} s, {result.iterations} IPOPT iterations")
+    lines.append("per phase count:")
+    for p in result.per_phase:
+        if p.status == "optimal":
+            gap = f"{p.surrogate_gap:+.1e}" if p.surrogate_gap is not None else "n/a"
+            lines.append(f"  n = {p.phases}: {p.status}, δ = {p.delta:.6f}, ratio = "
+                         f"{p.ratio:.4f}, surrogate gap {gap}, {len(p.starts)} starts")
+        else:
+            lines.append(f"  n = {p.phases}: {p.status}: {p.message}")
+    lines.append("every figure above is the exact evaluator's, not the NLP surrogate's")
+    return "\n".join(lines)
+
+
+def binding_text(active: list[dict], problem) -> str:
+    """One line: what binds at the optimum and what relaxing it by one unit buys."""
+    if not active:
+        return "binding: nothing (an interior optimum: no bound or constraint is active)"
+    what = objective_of(problem).symbol
+    return "binding: " + "; ".join(
+        f"{a['name']} (d{what}/d bound = {a['sensitivity']:+.3g}"
+        f"{'' if a['unit'] == '-' else ' per ' + a['unit']})" for a in active)
+
+
+def bound_warnings(result, problem) -> list[str]:
+    """A warning per free length the optimum rests on a bound of: the design would go past
+    it, so the bound shapes the result (is it a real limit, or a first guess?); and one per
+    length constraint held at zero, where the linkage degenerates (a pin radius of 0 puts
+    every rod on the crank pin)."""
+    from optdesign.quantities.criteria import LengthConstraint, constraints_of
+
+    criteria = {c.name: c for c in constraints_of(problem)}
+    out = []
+    for a in result.active:
+        criterion = criteria.get(a["name"])
+        if isinstance(criterion, LengthConstraint):
+            lower, upper = criterion.bounds(problem)
+            if (lower if a["side"] == "lower" else upper) == 0:
+                out.append(f"warning: {a['name']} is held at 0 {a['unit']}: the linkage "
+                           f"degenerates there (a pin radius of 0 puts every rod on the crank "
+                           f"pin); give the constraint a real least value in the problem file")
+    for a in result.active:
+        if a["kind"] != "bound":
+            continue
+        key = a["name"].split()[0]
+        spec = problem.design[key]
+        value = spec.lower if a["side"] == "lower" else spec.upper
+        out.append(f"warning: {key} rests on its {a['side']} bound, {value:g} mm: the "
+                   f"optimum would go past it (d{objective_of(problem).symbol}/d bound = "
+                   f"{a['sensitivity']:+.3g} per mm); check that the bound is a real limit")
+    return out

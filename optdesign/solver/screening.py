@@ -1,0 +1,299 @@
+"""Screening the box before IPOPT: thousands of designs on a coarse grid, clustered into basins.
+
+A scrambled Sobol sample of the free lengths (and the file's own design) is evaluated at once
+through the mechanism's speed function ``map``-ped over designs × crank samples: sampled δ,
+ratio, the transmission angle and the mechanism's length constraints, every constraint a
+filter. The designs that pass are clustered into basins by the multi-level single linkage rule
+(Rinnooy Kan & Timmer, "Stochastic global optimization methods part II: multi level methods",
+Math. Programming 39, 1987): a design seeds a basin when no better design lies within the
+critical distance r_k of it, r_k = π^(-1/2)·(Γ(1 + d/2)·σ·log k / k)^(1/d) in the unit box.
+The driver polishes the best basins with IPOPT.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.stats import qmc
+
+from optdesign.quantities.criteria import (SectionConstraint, TransmissionAngle, constraints_of,
+                                           objective_of, quantity_specs)
+from optdesign.envelope.sampled import driving_speeds
+from optdesign.evaluation.figures import eccentricities_of
+from optdesign.envelope.sampled import STROKE_SIGNS
+from optdesign.quantities import get_quantity
+from optdesign.quantities.extremes import lanes_of
+
+#: crank samples per turn of the screening grid: enough to rank designs (sampled δ is within
+#: a few per cent of the exact δ), not to certify them; IPOPT and the exact check do that
+SCREEN_SAMPLES = 48
+#: and at least this many per rocker curve, so every hand-over is bracketed closely
+SAMPLES_PER_CURVE = 8
+#: slack of the screening's transmission-angle filter, degrees: the coarse grid misses the
+#: worst angle by up to this much, and a design just outside may polish into the feasible set
+ANGLE_SLACK_DEG = 2.0
+#: σ of the critical distance (MLSL's theory asks σ > 4 for finitely many local searches; 2
+#: splits basins more finely, and the driver polishes only the best few)
+SIGMA = 2.0
+#: share of the screened designs that may seed a basin (MLSL's reduced sample, γ)
+REDUCED_SHARE = 0.25
+
+
+@dataclass
+class Candidate:
+    """One screened design: its free lengths, its sampled score and whether it passed."""
+
+    values: dict[str, float]
+    score: float                 # rank: feasible by sampled objective, then by violation
+    feasible: bool
+    unit: np.ndarray             # position in the unit box of the free lengths
+
+
+@dataclass
+class Screening:
+    candidates: list[Candidate] = field(default_factory=list)     # every screened design
+    seeds: list[Candidate] = field(default_factory=list)          # one per basin, best first
+    radius: float = 0.0
+    n_feasible: int = 0
+
+    def to_dict(self) -> dict:
+        return {"designs": len(self.candidates), "passed_filters": self.n_feasible,
+                "basins": len(self.seeds), "critical_distance": self.radius}
+
+
+def screen(problem, count: int, n_designs: int, extra: list[dict] = (),
+           sampled: dict | None = None) -> Screening:
+    """Screen ``n_designs`` Sobol designs and the designs in ``extra``; seeds best first.
+    ``sampled``, when given, receives the sampled ``delta`` and ``ratio`` of every candidate
+    (arrays in the candidates' order: a Pareto sweep filters them by ratio >= ε)."""
+    free = problem.free_lengths()
+    base = problem.start_values() | {problem.model.count_variable: count}
+    lower = np.array([problem.design[k].lower for k in free])
+    upper = np.array([problem.design[k].upper for k in free])
+    rows = [np.array([d[k] for k in free]) for d in [base, *extra]]
+    if free:
+        sobol = qmc.Sobol(d=len(free), scramble=True, seed=problem.solver.seed)
+        m = max(1, int(math.ceil(math.log2(max(n_designs, 2)))))
+        rows += list(spread(sobol.random_base2(m)[:n_designs], lower, upper))
+    X = np.array(rows).reshape(len(rows), len(free))
+    score, violation = _evaluate(problem, count, base, free, X, sampled)
+    feasible = violation <= 0
+    span = np.where(upper > lower, upper - lower, 1.0)
+    unit = (X - lower) / span
+    out = Screening(n_feasible=int(feasible.sum()))
+    # Feasible designs first, by their score; then the others, by how far they miss
+    # (Deb's rules: a rank, so scores and violations never mix units).
+    order = np.lexsort((np.where(feasible, score, violation), ~feasible))
+    key = np.empty(len(X))
+    key[order] = np.arange(len(X), dtype=float)
+    key[~np.isfinite(violation)] = np.inf     # does not assemble: never a seed
+    for i in range(len(X)):
+        out.candidates.append(Candidate(base | dict(zip(free, X[i])), float(key[i]),
+                                        bool(feasible[i]), unit[i]))
+    out.seeds, out.radius = _basins(out.candidates, len(free))
+    return out
+
+
+#: a free length whose range spans at least this ratio (three decades) is sampled evenly in
+#: its logarithm: evenly in mm, nearly every design of a 1e-3..1e3 mm range would lie above
+#: 1 mm, and the basins at small lengths would go unseen
+LOG_SPAN = 1e3
+
+
+def spread(unit: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Points of the unit cube spread over the box: evenly where a range spans less than
+    :data:`LOG_SPAN`, evenly in the logarithm where it spans more (the NLP's own scaling,
+    by the geometric mean of the bounds, is logarithmic too)."""
+    out = qmc.scale(unit, lower, upper) if len(unit) else unit.reshape(0, len(lower))
+    wide = upper >= LOG_SPAN * lower
+    if np.any(wide) and len(unit):
+        out[:, wide] = lower[wide] * (upper[wide] / lower[wide]) ** unit[:, wide]
+    return out
+
+
+def _evaluate(problem, count, base, free, X, sampled: dict | None = None
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """(score, violation) of every design row of X: sampled objective, and the largest
+    constraint violation (<= 0 when every filter passes; inf when it does not assemble);
+    ``sampled`` (if given) receives the sampled worst δ and ratio of each row."""
+    model = problem.model
+    S = X.shape[0]
+    curves = count * len(STROKE_SIGNS[problem.stroke])
+    N = max(SCREEN_SAMPLES, SAMPLES_PER_CURVE * curves)
+    fmap = model.speeds_at_once(count, tuple(sorted(problem.options.items())))
+    phi = np.tile(np.linspace(0.0, 2 * np.pi, N, endpoint=False), S)[None, :]
+    lengths = {k: np.full(S, base[k], dtype=float) for k in model.lengths}
+    for j, k in enumerate(free):
+        lengths[k] = X[:, j]
+    c = problem.constraints
+    cos_limit = min(math.cos(math.radians(max(c.min_transmission_angle_deg -
+                                              ANGLE_SLACK_DEG, 0.0))),
+                    math.sqrt(1.0 - c.assembly_margin))
+    violation = np.full(S, -np.inf)
+    ripples, ratio, peaks = [], None, {}
+    with np.errstate(all="ignore"):
+        for e in eccentricities_of(problem):
+            P = np.vstack([lengths[k] * (e if k == model.regulating_variable else 1.0)
+                           for k in model.lengths])
+            dth, cos_mu = (np.array(v) for v in fmap(phi, np.repeat(P, N, axis=1)))
+            n = dth.shape[0]
+            f = driving_speeds(dth, problem.stroke).reshape(-1, S, N) / e
+            env = np.maximum(f.max(axis=0), 0.0)
+            hi, mean = env.max(axis=1), env.mean(axis=1)
+            lo = np.minimum(env.min(axis=1), _crossings(f).min(axis=1))
+            avg = 0.5 * (hi + lo) if problem.objective.ripple == "midrange" else mean
+            if e in problem.eccentricities:
+                ripples.append((hi - lo) / avg)
+                peaks[e] = hi * e * problem.input_speed
+            if e == 1.0:
+                ratio, peak = mean, hi
+            worst_cos = np.abs(cos_mu).reshape(n, S, N).max(axis=(0, 2))
+            bad = ~np.isfinite(worst_cos) | ~np.all(np.isfinite(f), axis=(0, 2)) | \
+                (worst_cos > 1.0)
+            violation = np.maximum(violation, np.where(bad, np.inf, worst_cos - cos_limit))
+        q = _Sampled(lengths, ratio, np.max(ripples, axis=0), peak * problem.input_speed,
+                     sampled_quantities(problem, count, lengths, ripples, peaks, ratio))
+        for criterion in constraints_of(problem):
+            if isinstance(criterion, (TransmissionAngle, SectionConstraint)):
+                continue        # the angle is filtered above, with slack; sections at the check
+            lower, upper = criterion.bounds(problem)
+            v = np.asarray(criterion.value(q), dtype=float)
+            scale = max([1.0] + [abs(b) for b in (lower, upper) if math.isfinite(b)])
+            violation = np.maximum(violation, np.maximum(lower - v, v - upper) / scale)
+        score = objective_of(problem).key(q)
+        if sampled is not None:
+            sampled.update(delta=np.asarray(q.worst_ripple, float),
+                           ratio=np.asarray(q.ratio, float), quantities=q.quantities)
+    violation = np.where(np.isnan(violation), np.inf, violation)
+    score = np.where(np.isfinite(score), score, np.inf)
+    return score, violation
+
+
+def _crossings(f: np.ndarray) -> np.ndarray:
+    """Envelope value where the driving curve changes between two samples, each curve taken
+    linear in between: the kink (the trough) that the samples step over, to O(h²).
+
+    ``f``: curves × designs × samples. Returns designs × samples (inf where no hand-over).
+    """
+    nxt = np.roll(f, -1, axis=2)
+    a, b = f.argmax(axis=0), nxt.argmax(axis=0)
+    pick = lambda g, c: np.take_along_axis(g, c[None], axis=0)[0]   # noqa: E731
+    fa0, fa1, fb0, fb1 = pick(f, a), pick(nxt, a), pick(f, b), pick(nxt, b)
+    gap0, gap1 = fa0 - fb0, fa1 - fb1
+    t = np.clip(gap0 / np.where(gap0 != gap1, gap0 - gap1, 1.0), 0.0, 1.0)
+    value = np.maximum(fa0 + t * (fa1 - fa0), 0.0)
+    return np.where(a != b, value, np.inf)
+
+
+@dataclass
+class _Sampled:
+    """The NLP's named quantities, as arrays over the screened designs (sampled)."""
+
+    lengths: dict
+    ratio: np.ndarray
+    worst_ripple: np.ndarray
+    peak_speed: np.ndarray
+    quantities: dict = field(default_factory=dict)
+
+
+def sampled_quantities(problem, count: int, lengths: dict, ripples: list, peaks: dict,
+                       ratio: np.ndarray) -> dict:
+    """Each quantity spec's sampled value per screened design: a turn quantity's maxima on
+    the screening's grid (:meth:`~optdesign.quantities.base.TurnQuantity.sampled`), the
+    envelope's sampled peak, ripple and ratio; the worst over the spec's eccentricities."""
+    model = problem.model
+    listed = list(problem.eccentricities)
+    options = tuple(sorted(problem.options.items()))
+    out = {}
+    for spec in quantity_specs(problem):
+        quantity = get_quantity(spec.name)
+        eccs = [spec.at] if spec.at is not None else listed
+        if spec.name == "ratio":
+            values = [ratio]
+        elif spec.name == "ripple":
+            values = [ripples[listed.index(e)] for e in eccs]
+        elif spec.name == "peak_speed":
+            values = [peaks[e] for e in eccs]
+        else:
+            g, _ = quantity.function(model, count, options)
+            S = len(next(iter(lengths.values())))
+            N = max(SCREEN_SAMPLES, SAMPLES_PER_CURVE * count)
+            phi = np.tile(np.linspace(0.0, 2 * np.pi, N, endpoint=False), S)[None, :]
+            values = []
+            for e in eccs:
+                P = np.vstack([lengths[k] * (e if k == model.regulating_variable else 1.0)
+                               for k in model.lengths])
+                grid = _sample_lanes(g, phi, np.repeat(P, N, axis=1))
+                values.append(quantity.sampled(grid.reshape(grid.shape[0], S, N),
+                                               problem.input_speed))
+        out[spec.key] = np.max(values, axis=0) if quantity.worst == "max" else \
+            np.min(values, axis=0)
+    return out
+
+
+def _sample_lanes(function, phi, P) -> np.ndarray:
+    """``function`` at many (φ, p) columns: NumPy lanes, or CasADi's ``map``."""
+    lanes = lanes_of(function)
+    if lanes is not None:
+        return lanes(phi, P)[0]
+    return np.array(function.map(P.shape[1])(phi, P))
+
+
+def _basins(candidates: list[Candidate], d: int) -> tuple[list[Candidate], float]:
+    """MLSL seeds: in the reduced sample (the best share), a design no better design lies
+    within the critical distance of. Returns the seeds, best first, and the distance."""
+    order = sorted(range(len(candidates)), key=lambda i: candidates[i].score)
+    order = [i for i in order if math.isfinite(candidates[i].score)]
+    if not order:
+        return [], 0.0
+    k = len(candidates)
+    if d == 0:
+        return [candidates[order[0]]], 0.0
+    radius = (math.gamma(1 + d / 2) * SIGMA * math.log(k) / k) ** (1 / d) / math.sqrt(math.pi)
+    reduced = order[:max(1, int(math.ceil(REDUCED_SHARE * len(order))))]
+    seeds = []
+    points = np.array([candidates[i].unit for i in reduced])
+    for rank, i in enumerate(reduced):
+        if rank == 0 or np.min(np.linalg.norm(points[:rank] - points[rank], axis=1)) > radius:
+            seeds.append(candidates[i])
+    return seeds, radius
+
+
+#: designs per line of the line screening
+LINE_POINTS = 64
+
+
+def line_seeds(problem, count: int, values: dict) -> list[Candidate]:
+    """Basins beside an optimum along each free length that is not on a bound.
+
+    The box is screened again on lines through ``values``, one per free length inside its
+    bounds (the others held, so the bounds the optimum rests on stay active): the local
+    minima of the sampled objective along each line, among the designs that pass the filters
+    and away from the optimum itself, best first. A narrow basin next to the optimum's face,
+    which a sample of the whole box steps over, is found this way.
+    """
+    free = problem.free_lengths()
+    base = problem.start_values() | {problem.model.count_variable: count}
+    centre = np.array([values[k] for k in free], dtype=float)
+    lower = np.array([problem.design[k].lower for k in free])
+    upper = np.array([problem.design[k].upper for k in free])
+    span = upper - lower
+    out = []
+    for j in range(len(free)):
+        if min(centre[j] - lower[j], upper[j] - centre[j]) <= 1e-6 * span[j]:
+            continue
+        X = np.tile(centre, (LINE_POINTS, 1))
+        X[:, j] = np.linspace(lower[j], upper[j], LINE_POINTS)
+        score, violation = _evaluate(problem, count, base, free, X)
+        ok = violation <= 0
+        s = np.where(ok, score, np.inf)
+        step = span[j] / (LINE_POINTS - 1)
+        for i in range(LINE_POINTS):
+            left = s[i - 1] if i > 0 else np.inf
+            right = s[i + 1] if i < LINE_POINTS - 1 else np.inf
+            if ok[i] and s[i] <= left and s[i] <= right and \
+                    abs(X[i, j] - centre[j]) > 2 * step:
+                out.append(Candidate(base | dict(zip(free, X[i])), float(s[i]), True,
+                                     (X[i] - lower) / np.where(span > 0, span, 1.0)))
+    return sorted(out, key=lambda c: c.score)

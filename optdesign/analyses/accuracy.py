@@ -29,6 +29,11 @@ from optdesign.quantities.criteria import objective_of
 from optdesign.evaluation.design import Design
 from optdesign.envelope.sampled import StrokeFigures, output_envelope, sampled_figures
 from optdesign.envelope.exact import DEFAULT_GRID, exact_figures
+from optdesign.envelope.sampled import driving_speeds
+from optdesign.figures.design import place_labels, pyplot
+from optdesign.solver import solve, verify
+from optdesign.solver.driver import PhaseSolver
+from optdesign.solver.verify import start_guess
 
 REFERENCE_GRID = 16384
 SAMPLED_N = (16, 32, 64, 90, 128, 256, 512, 1024, 4096, 16384, 65536)
@@ -124,7 +129,6 @@ def exact_rows(design, stroke, input_speed, ref: Reference, grids=EXACT_GRID, e=
 
 def lse_figures(design, stroke, input_speed, n_samples, rho, e=1.0) -> StrokeFigures:
     """The plain log-sum-exp formulation (no exact hand-over or peak points), see module doc."""
-    from optdesign.envelope.sampled import driving_speeds
     phi = np.linspace(0.0, 2 * np.pi, n_samples, endpoint=False)
     f = driving_speeds(design.sample(phi, e)["dtheta"], stroke)
     top = f.max(axis=0)
@@ -148,8 +152,6 @@ def lse_rows(design, stroke, input_speed, ref: Reference, samples=SURROGATE_N,
 def surrogate_figures(problem, values, samples: int, smoothing: float):
     """The NLP's view of one fixed design: (StrokeFigures at e = 1, inner solve time, time of
     one evaluation of the NLP's constraints and their Jacobian, IPOPT status)."""
-    from optdesign.solver.driver import PhaseSolver
-    from optdesign.solver.verify import start_guess
 
     fixed = problem.with_values(values)
     fixed = replace(fixed, solver=replace(problem.solver, samples=samples, smoothing=smoothing),
@@ -200,8 +202,6 @@ def surrogate_rows(problem, values, ref: Reference, samples=SURROGATE_N, smoothi
 def solve_rows(problem, settings=SOLVE_SETTINGS, reference=SOLVE_REFERENCE, progress=None):
     """Full solves of ``problem`` at several (samples, smoothing), ``reference`` (the tightest)
     first: run time, and each verified optimum's δ and ratio against the best of them."""
-    from optdesign.solver import solve, verify
-
     runs = []
     for n, rho in (reference,) + tuple(settings):
         p = replace(problem, solver=replace(problem.solver, samples=n, smoothing=rho))
@@ -318,7 +318,6 @@ def plot_accuracy(rows: list[dict], ax=None, title: str | None = None):
     Points are labelled with their sample count where the label overlaps no other label or
     marker: each line's smallest and largest count first, then the others while room is left.
     """
-    from optdesign.figures.design import place_labels, pyplot
     plt = pyplot()
     fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(figsize=(8.5, 5.6))
     floor = 1e-16

@@ -12,6 +12,10 @@ from optdesign.evaluation.figures import evaluate
 from optdesign.quantities import design_quantities
 from optdesign.evaluation.regulation import worst_over_range
 from optdesign.outputs.tabular import Tabular
+from optdesign.evaluation.regulation import curve_over_range
+from optdesign.outputs.units import design_units, gear_ratio_text, stamped
+from optdesign.quantities.criteria import Measured
+from optdesign.solver.verify import checks
 
 
 @dataclass
@@ -74,7 +78,6 @@ class AnalysisResult(Tabular):
         out["constraints"] = self.constraints
         out["quantities"] = self.quantities
         out.update(self.sections)
-        from optdesign.outputs.units import design_units, stamped
         return stamped(out, design_units(self.mechanism))
 
 
@@ -141,8 +144,6 @@ def check_constraints(problem, ev) -> list[dict]:
     """Every constraint of the problem checked on the evaluation ``ev`` (listed
     eccentricities and e = 1) exactly as the solver's verification checks an optimum
     (:func:`optdesign.solver.verify.checks`), without evaluating the design again."""
-    from optdesign.quantities.criteria import Measured
-    from optdesign.solver.verify import checks
 
     return [{"name": criterion.name, "satisfied": holds,
              "margin": 0.0 - amount if np.isfinite(amount) else None,
@@ -152,8 +153,6 @@ def check_constraints(problem, ev) -> list[dict]:
 
 def format_analysis(result: AnalysisResult, name: str = "") -> str:
     """A readable table of an analysis, for the terminal."""
-    from optdesign.outputs.units import design_units, gear_ratio_text
-
     units = design_units(result.mechanism)
     lines = [f"{name or result.mechanism}: {result.mechanism}, ω1 = {result.input_speed:g} rad/s"]
     lines.append("design: " + ", ".join(
@@ -221,8 +220,6 @@ def regulation_curve(problem, values: dict | None = None) -> dict:
     the regulation interval, or over (0, 1] where the design assembles when the file lists
     eccentricities (NaN where it does not); with ``lower``, ``upper`` (the interval or
     None) and ``listed``. What ``analyze --out`` draws into regulation.png."""
-    from optdesign.evaluation.regulation import curve_over_range
-
     design = Design.from_problem(problem, values)
     span = problem.eccentricity_range
     lower, upper = span if span is not None else (FIGURE_LEAST_ECCENTRICITY, 1.0)

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from optdesign.envelope.sampled import STROKE_SIGNS
+from optdesign.figures.design import pyplot
 
 
 @dataclass(frozen=True)
@@ -64,8 +65,6 @@ def plot_curves(curves: Curves, axes=None, title: str = ""):
 
     ``axes``: an existing 3×2 array of axes, or None for a new figure.
     """
-    from optdesign.figures.design import pyplot
-
     plt = pyplot()
 
     if axes is None:

@@ -7,6 +7,7 @@ printed by ``--json``; :func:`format_driveline` turns it into the terminal's tex
 from __future__ import annotations
 
 from optdesign.driveline.section import CONSTRAINT_KEY
+from optdesign.outputs.units import stamped
 
 #: ``verdict`` of the speed check: the constraint ``max_speed_fraction_of_critical`` holds or
 #: not; ``unchecked`` when the file sets no constraint; ``no_output_speed`` when the design does
@@ -18,8 +19,6 @@ def driveline_report(problem, analysis, figure: str | None = None) -> dict:
     """The ``driveline --json`` object of ``problem`` (with a ``driveline:`` section) and its
     :class:`~optdesign.analyses.analyze.AnalysisResult`; ``figure`` the path of the figure written;
     ``schema_version`` and ``units`` at the end."""
-    from optdesign.outputs.units import stamped
-
     section = problem.sections["driveline"]
     figures = analysis.sections.get("driveline") or section.analyze(problem, analysis)
     if figures.get("operating_speed_rad_s") is None:

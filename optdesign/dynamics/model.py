@@ -43,6 +43,7 @@ from optdesign.numerics.buffered import BufferedCall
 from optdesign.errors import ProblemError
 from optdesign.envelope.sampled import STROKE_SIGNS
 from optdesign.dynamics.section import DynamicsSection, LoadTable
+from optdesign.envelope.exact import exact_figures
 
 TWO_PI = 2.0 * np.pi
 #: state vector: crank angle, crank speed, output angle, output speed, motor work, load work.
@@ -125,8 +126,6 @@ class ComposedPosition:
     size = 1
 
     def __init__(self, design, stroke: str, reduction: float):
-        from optdesign.envelope.exact import exact_figures
-
         self.holders = Holders(design, stroke, reduction)
         _, runs = exact_figures(design, stroke, 1.0)
         self.runs = []

@@ -6,11 +6,10 @@ and return the figure; matplotlib is imported here only, with the Agg backend.
 from __future__ import annotations
 
 import numpy as np
+from optdesign.figures.design import pyplot
 
 
 def _axes(ax, figsize):  # noqa: D401 - one axes, made if not given
-    from optdesign.figures.design import pyplot
-
     plt = pyplot()
 
     if ax is None:

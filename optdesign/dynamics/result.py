@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from optdesign.envelope.sampled import StrokeFigures
+from optdesign.outputs.units import stamped
 
 #: ``steady``: the cycle repeated (exit 0); ``not_steady``: ``cycles`` ran out first;
 #: ``stalled``: the output never moves, or the crank cannot get round; ``failed``: the
@@ -75,8 +76,6 @@ class SimulationResult:
 
     def to_dict(self) -> dict:
         """dynamics.json: the contract's keys, then ``schema_version`` and ``units``."""
-        from optdesign.outputs.units import stamped
-
         return stamped({
             "name": self.name, "mechanism": self.mechanism,
             "status": self.status, "reason": self.reason,
@@ -103,8 +102,6 @@ class SimulationResult:
 
 def failure_dict(problem, section, method: str, status: str, reason: str) -> dict:
     """``dynamics.json`` of a run whose integration stopped before a cycle was recorded."""
-    from optdesign.outputs.units import stamped
-
     return stamped({"name": problem.name, "mechanism": problem.mechanism, "status": status,
                     "reason": reason, "steady": False,
                     "model": {"freewheel": section.freewheel, "crank": section.crank,

@@ -33,6 +33,7 @@ from optdesign.dynamics.model import TWO_PI, DriveModel, Mode
 from optdesign.dynamics.result import SimulationResult
 from optdesign.dynamics.section import DynamicsSection
 from optdesign.dynamics.verdict import LONGEST_PERIOD, held_whole_turn, judge
+from optdesign.envelope.exact import exact_figures
 
 
 def simulate(problem, section: DynamicsSection | None = None, method: str | None = None,
@@ -58,8 +59,6 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
         The integration broke down; :class:`~optdesign.dynamics.integrator.StallError` when
         the crank cannot get round.
     """
-    from optdesign.envelope.exact import exact_figures
-
     section = section or problem.sections["dynamics"]
     method = method or section.method
     design = Design.from_problem(problem)

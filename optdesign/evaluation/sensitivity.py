@@ -47,6 +47,7 @@ from optdesign.errors import ProblemError
 from optdesign.evaluation.figures import Evaluation, evaluate, evaluate_problem
 from optdesign.envelope.exact import (TOGGLE_STEP, TWO_PI, Curves, search_grid, stationary_angles,
                                       toggles)
+from optdesign.mechanisms import get_mechanism
 
 #: extremes whose values agree to this (relative) are one extreme reached at several points:
 #: an optimum equalises competing extremes only to the solver's tolerance, and a step of
@@ -254,8 +255,6 @@ def _gradient_function(mechanism: str, count: int, options: tuple, k: int) -> ca
     """(phi, p) -> θ_k, dθ_k/dφ, d²θ_k/dφ², cos μ_k and the gradients of θ_k, dθ_k/dφ and
     cos μ_k with respect to p: CasADi's symbolic derivatives of the mechanism's one function,
     chain k alone (a point needs one or two chains: the cost stays linear in n)."""
-    from optdesign.mechanisms import get_mechanism
-
     model = get_mechanism(mechanism)
     full = model.kinematics(count, options)
     phi, p = ca.SX.sym("phi"), ca.SX.sym("p", len(model.lengths))

@@ -10,6 +10,8 @@ from optdesign.outputs.tabular import Tabular
 from optdesign.fronts.axis import Axis
 from optdesign.fronts.indicators import indicators, non_dominated, objectives
 from optdesign.fronts.refine import VERIFIED
+from optdesign.outputs.units import stamped
+from optdesign.quantities import known
 
 #: leading columns of pareto.csv (docs/contract.md names the first nine); the
 #: mechanism's own design keys replace l0 .. l3 for other mechanisms
@@ -24,8 +26,6 @@ ENVELOPE_QUANTITIES = ("ratio", "ripple", "transmission_angle")
 def quantity_columns() -> list[str]:
     """Every other quantity (optdesign.quantities) is a column of its own, its worst over
     the listed eccentricities."""
-    from optdesign.quantities import known
-
     return [name for name in known() if name not in ENVELOPE_QUANTITIES]
 
 
@@ -129,8 +129,6 @@ class ParetoResult(Tabular):
         """pareto.json: the run, the indicators, the knee, every point and the raw ends, then
         ``schema_version`` and ``units``, which also give the unit of every pareto.csv
         column (the design columns in mm)."""
-        from optdesign.outputs.units import stamped
-
         df = self.points.replace({np.nan: None})
         lengths = [c for c in self.points.columns
                    if c not in LEAD + TAIL + quantity_columns() + ["index"]]

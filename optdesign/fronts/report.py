@@ -17,6 +17,7 @@ import numpy as np
 from optdesign.fronts.axis import Axis
 from optdesign.fronts.indicators import REFERENCE
 from optdesign.fronts.refine import LOCAL, MAX_ROUNDS, VERIFIED
+from optdesign.figures.design import pyplot
 
 MARKERS = "osD^v<>p*h"
 
@@ -25,7 +26,6 @@ def plot_fronts(points, ax=None, title: str | None = None, axis: Axis = Axis()):
     """δ against ratio (or the quantity ``axis`` names): each phase count's own front (line),
     the points it dominates (faint), the overall non-dominated designs (ringed) and the knee
     (star)."""
-    from optdesign.figures.design import pyplot
     plt = pyplot()
     x = axis.name
     fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(figsize=(7.5, 5))
@@ -76,7 +76,6 @@ def plot_lengths(points, bounds: dict, axes=None, title: str | None = None,
     one is held by that bound). ``bounds``: {length: (lower, upper)} in mm."""
     from matplotlib.ticker import MaxNLocator
 
-    from optdesign.figures.design import pyplot
     plt = pyplot()
     names = list(bounds)
     if axes is None:

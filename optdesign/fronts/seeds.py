@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from optdesign.fronts.axis import axis_of
+from optdesign.solver.screening import screen
 
 #: a screened design passes ε when its sampled ratio is at least ε·(1 − RATIO_SLACK): the
 #: coarse grid's ratio is within a fraction of a per cent of the exact one, and a start just
@@ -43,8 +44,6 @@ class ScreenedCount:
     @classmethod
     def of(cls, problem, count: int) -> "ScreenedCount":
         """Screen ``problem.solver.screen`` designs of one count (the solve's own sample)."""
-        from optdesign.solver.screening import screen
-
         sampled: dict = {}
         s = screen(problem, count, problem.solver.screen, sampled=sampled)
         free = tuple(problem.free_lengths())

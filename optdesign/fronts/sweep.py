@@ -36,6 +36,8 @@ from optdesign.fronts.front import ParetoResult, evaluate, frame
 from optdesign.fronts.seeds import ScreenedCount
 from optdesign.fronts.section import DEFAULT_POINTS, ParetoSection
 from optdesign.fronts.store import Journal
+from optdesign.fronts.cluster import connect
+from optdesign.solver import verify
 
 #: pareto.csv/json are rebuilt from the journal at most this often while points come in (a
 #: rebuild takes tens of ms in this process, beside the workers) and once at the end
@@ -104,7 +106,6 @@ class _Dask:
     """The same tasks on a Dask distributed scheduler (``--scheduler ADDRESS``)."""
 
     def __init__(self, address):
-        from optdesign.fronts.cluster import connect
         self.own = isinstance(address, str)
         self.client = connect(address)      # one deadline, a scheduler checked as such
 
@@ -431,8 +432,6 @@ def _reverify(problem, done: dict, journal: Journal) -> None:
     its δ, ratio and least transmission angle must be the record's, and the design must meet
     the problem's constraints. An edited or foreign record is refused (exit 2) with its line;
     the journal is left as it is."""
-    from optdesign.solver import verify
-
     for key, rec in done.items():
         if not rec.get("feasible"):
             continue

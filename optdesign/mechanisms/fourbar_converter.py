@@ -18,6 +18,7 @@ import casadi as ca
 from optdesign.errors import ProblemError
 from optdesign.mechanisms.base import Mechanism, OptionSpec, VariableSpec
 from optdesign.mechanisms.geometry import angle_of, circle_intersection, unit
+from optdesign.quantities.criteria import LengthConstraint
 
 BRANCH_SIGN = {"left": 1, "right": -1}
 
@@ -90,8 +91,6 @@ class FourBarConverter(Mechanism):
         chain 1 (O A B1 O1) is a Grashof crank-rocker with l1 the crank, s + l <= p + q,
         written as l1 + X <= (sum of the other two) for each X of l0, l2, l3 so that no max()
         is needed (summing two of them also gives l1 <= l0, l2, l3)."""
-        from optdesign.quantities.criteria import LengthConstraint
-
         out = [LengthConstraint("pin_radius", lambda p: self.pin_radius(p, options),
                                 lower=constraints.min_pin_radius, column="pin_radius")]
         if constraints.grashof:

@@ -39,6 +39,7 @@ import casadi as ca
 from optdesign.errors import ProblemError
 from optdesign.mechanisms.base import Mechanism, VariableSpec
 from optdesign.mechanisms.geometry import SQRT_FLOOR, unit
+from optdesign.quantities.criteria import LengthConstraint
 
 TWO_PI = 2 * math.pi
 
@@ -86,8 +87,6 @@ class PulseReducer(Mechanism):
     def criteria(self, constraints, options):
         """The crank pin stays inside the pivot circle, r = r1/a < 1 (eqs. 1-2):
         1 - r1/a >= assembly_margin (dimensionless, O(1) for the NLP)."""
-        from optdesign.quantities.criteria import LengthConstraint
-
         return [LengthConstraint("crank_inside_pivots", lambda p: 1 - p["r1"] / p["a"],
                                  lower=constraints.assembly_margin, unit="-")]
 

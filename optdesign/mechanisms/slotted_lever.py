@@ -37,6 +37,7 @@ import casadi as ca
 
 from optdesign.errors import ProblemError
 from optdesign.mechanisms.base import Mechanism, VariableSpec
+from optdesign.quantities.criteria import LengthConstraint
 
 
 class SlottedLever(Mechanism):
@@ -77,8 +78,6 @@ class SlottedLever(Mechanism):
     def criteria(self, constraints, options):
         """Link 7 oscillates only while its pivot D lies beyond A's circle, XD > L:
         1 - L/XD >= assembly_margin (dimensionless, O(1) for the NLP)."""
-        from optdesign.quantities.criteria import LengthConstraint
-
         return [LengthConstraint("pivot_outside_circle", lambda p: 1 - p["L"] / p["XD"],
                                  lower=constraints.assembly_margin, unit="-")]
 

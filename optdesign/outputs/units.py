@@ -21,6 +21,8 @@ from collections.abc import Mapping
 from numbers import Number
 
 from optdesign.outputs.atomic import SCHEMA_VERSION
+from optdesign.mechanisms import REGISTRY, get_mechanism
+from optdesign.quantities import get_quantity, known
 
 #: the ratio's convention, stated wherever a ratio is reported
 RATIO_UNIT = ("- (output speed / input speed, omega_out/omega1; the gear-ratio convention "
@@ -151,8 +153,6 @@ def unit_of(key: str, variables: Mapping[str, str] | None = None) -> str | None:
 def _quantity_units() -> dict[str, str]:
     """The unit of every quantity by name (:mod:`optdesign.quantities`), the ratio's with its
     convention."""
-    from optdesign.quantities import get_quantity, known
-
     return {name: get_quantity(name).unit for name in known()} | {"ratio": RATIO_UNIT}
 
 
@@ -192,8 +192,6 @@ def _holds_a_figure(key: str, value) -> bool:
 
 def design_units(mechanism: str) -> dict[str, str]:
     """``{design key: unit}`` of a registered mechanism (empty for an unknown name)."""
-    from optdesign.mechanisms import REGISTRY, get_mechanism
-
     if mechanism not in REGISTRY:
         return {}
     return {v.name: v.unit for v in get_mechanism(mechanism).variables}

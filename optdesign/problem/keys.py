@@ -20,6 +20,7 @@ from optdesign.problem.loader import (CONSTRAINT_KEYS, EXTRA_CONSTRAINT_KEYS,
                                       GENERAL_CONSTRAINT_KEYS, MAX_COUNT, OBJECTIVE_KEYS,
                                       REGULATION_KEYS, SECTION_PARSERS, SOLVER_KEYS,
                                       TOP_DECLARATIONS)
+from optdesign.quantities import known as known_quantities
 
 
 def design_keys(mech) -> tuple[Key, ...]:
@@ -44,8 +45,6 @@ def option_keys(mech) -> tuple[Key, ...]:
 def constraint_keys(mech) -> tuple[Key, ...]:
     """The ``constraints:`` keys a file with this mechanism may give: the general ones, the
     mechanism's own (``constraint_keys``), those of the sections and a bound per quantity."""
-    from optdesign.quantities import known as known_quantities
-
     accepted = GENERAL_CONSTRAINT_KEYS | set(mech.constraint_keys) | EXTRA_CONSTRAINT_KEYS | \
         set(known_quantities())
     missing = accepted - {k.name for k in CONSTRAINT_KEYS}

@@ -24,6 +24,7 @@ from optdesign.mechanisms import get_mechanism, known
 from optdesign.quantities import known as known_quantities
 from optdesign.quantities.bounds import ALIASES, read_bound
 from optdesign.quantities.bounds import declarations as quantity_declarations
+from optdesign.problem.yaml_text import parse, read_text
 
 #: Optional sections parsed by the module that owns them, imported only when present:
 #: name -> "module:function(section_dict, where) -> parsed object".
@@ -372,8 +373,6 @@ class Problem:
 def load_problem(path: str | Path) -> Problem:
     """Read and validate a YAML problem file, within the limits of
     :mod:`optdesign.problem.yaml_text` (size, nesting, aliases, duplicate keys)."""
-    from optdesign.problem.yaml_text import parse, read_text
-
     path = Path(path)
     where = _printable(path.name) or str(path)
     data = parse(read_text(path), where)

@@ -13,6 +13,7 @@ from optdesign.declarations import REQUIRED, Key
 from optdesign.mechanisms import get_mechanism, known
 from optdesign.problem.loader import MAX_INTEGER, MAX_TEXT_CHARS, NUMBER_MAGNITUDE
 from optdesign.problem.keys import problem_keys
+from optdesign.quantities.criteria import objectives
 
 DIALECT = "https://json-schema.org/draft/2020-12/schema"
 #: keys whose allowed values depend on the mechanism: stated once per mechanism
@@ -51,8 +52,6 @@ def _mechanism_rule(name: str) -> dict:
 def _objective_rules(keys) -> list[dict]:
     """``objective.max_ripple`` (and whatever else an objective ``requires``) when
     ``objective.minimize`` names that objective."""
-    from optdesign.quantities.criteria import objectives
-
     out = []
     for name, objective in objectives().items():
         if objective.requires:

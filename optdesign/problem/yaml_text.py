@@ -20,6 +20,7 @@ import yaml
 from yaml.nodes import MappingNode, ScalarNode, SequenceNode
 
 from optdesign.errors import ProblemError
+from optdesign.errors import shown
 
 MAX_FILE_BYTES = 1 << 20        # 1 MiB; the problem files in problems/ are about 1 kB
 MAX_DEPTH = 16                  # the deepest key path of the contract is 4 levels
@@ -118,7 +119,6 @@ BoundedLoader.add_implicit_resolver(
 
 
 def _short(text: str, limit: int = 40) -> str:
-    from optdesign.errors import shown
     return shown(text, limit)
 
 

@@ -26,6 +26,7 @@ import casadi as ca
 import numpy as np
 
 from optdesign.quantities.extremes import turn_maxima
+from optdesign.envelope.exact import search_grid
 
 #: how a quantity's values combine: into its worst, and across its components
 COMBINE = {"max": max, "min": min}
@@ -113,8 +114,6 @@ class TurnQuantity(Quantity):
         """Each component's maximum over the turn, exactly (:func:`turn_maxima`),
         remembered for the designs evaluated last (a solve's check and its next start).
         ``sampled``: the evaluation's sampling at this eccentricity, when at hand."""
-        from optdesign.envelope.exact import search_grid
-
         key = (self.name, design.mechanism, design.option_key,
                tuple(sorted(design.values.items())), float(eccentricity))
         known = _MAXIMA.get(key)

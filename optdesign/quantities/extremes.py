@@ -17,6 +17,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from optdesign.numerics.buffered import buffered
+from optdesign.numerics.lanes import Lanes
 
 TWO_PI = 2 * np.pi
 #: offset of a breakpoint's one-sided limits (as the exact evaluator's)
@@ -143,8 +144,6 @@ _LANES: dict = {}
 
 def lanes_of(function):
     """The NumPy lanes of ``function``, made once (None where it does not translate)."""
-    from optdesign.numerics.lanes import Lanes
-
     known = _LANES.get(id(function))
     if known is None or known[0] is not function:
         try:

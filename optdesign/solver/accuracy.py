@@ -9,6 +9,8 @@ import numpy as np
 
 from optdesign.evaluation.design import Design
 from optdesign.envelope.exact import DEFAULT_GRID, exact_figures
+from optdesign.evaluation.figures import eccentricities_of
+from optdesign.quantities.criteria import TOL_ANGLE_DEG, TOL_LENGTH_REL, TOL_RATIO
 
 def solve_accuracy(problem, best) -> dict:
     """The ``accuracy`` dict of a :class:`~optdesign.solver.result.SolveResult`.
@@ -26,8 +28,6 @@ def solve_accuracy(problem, best) -> dict:
       minus the exact least angle (what sampling the constraint misses; the driver tightens the
       NLP's bound by it and re-solves when the exact check fails).
     """
-    from optdesign.quantities.criteria import TOL_ANGLE_DEG, TOL_LENGTH_REL, TOL_RATIO
-    from optdesign.evaluation.figures import eccentricities_of
 
     s = problem.solver
     out = {"verification": "exact evaluator (crossings and stationary points by Brent's "

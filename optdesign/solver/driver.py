@@ -28,6 +28,8 @@ from optdesign.solver.result import PhaseResult, SolveResult, StartRecord
 from optdesign.solver.robust import next_scenarios, robust_verdict, worst_cases
 from optdesign.solver.screening import line_seeds, screen
 from optdesign.solver.verify import TOL_ANGLE_DEG, Verification, start_guess, verify
+from optdesign.lifetime import die_with_parent
+from optdesign.quantities.criteria import LengthConstraint, constraints_of
 
 SUCCESS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 #: the status of a run stopped because it entered a known optimum's neighbourhood
@@ -393,8 +395,6 @@ def _in_parallel(problem, count: int, starts: list[dict]) -> list[tuple[Outcome,
     import os
     from concurrent.futures import ProcessPoolExecutor
 
-    from optdesign.lifetime import die_with_parent
-
     pool = ProcessPoolExecutor(len(starts), mp_context=mp.get_context("fork"),
                                initializer=die_with_parent, initargs=(os.getpid(),))
     try:
@@ -591,8 +591,6 @@ def _beyond_the_box(problem, count: int) -> PhaseResult | None:
     import itertools
 
     import casadi as ca
-
-    from optdesign.quantities.criteria import LengthConstraint, constraints_of
 
     names = list(problem.model.lengths)
     sym = ca.SX.sym("l", len(names))

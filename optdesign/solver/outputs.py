@@ -3,12 +3,13 @@ from __future__ import annotations
 
 from optdesign.quantities.criteria import objective_of, quantity_specs
 from optdesign.quantities import get_quantity
+from optdesign.evaluation.sensitivity import sensitivity_line
+from optdesign.outputs.units import gear_ratio_text
+from optdesign.quantities.criteria import LengthConstraint, constraints_of
 
 
 def summary_text(result, problem) -> str:
     """A short plain-text account of a solve, for the terminal and summary.txt."""
-    from optdesign.evaluation.sensitivity import sensitivity_line
-    from optdesign.outputs.units import gear_ratio_text
 
     lines = [f"{problem.name}: {result.status} ({problem.mechanism}, {problem.stroke} stroke, "
              f"ω1 = {problem.input_speed:g} rad/s)"]
@@ -68,8 +69,6 @@ def bound_warnings(result, problem) -> list[str]:
     it, so the bound shapes the result (is it a real limit, or a first guess?); and one per
     length constraint held at zero, where the linkage degenerates (a pin radius of 0 puts
     every rod on the crank pin)."""
-    from optdesign.quantities.criteria import LengthConstraint, constraints_of
-
     criteria = {c.name: c for c in constraints_of(problem)}
     out = []
     for a in result.active:

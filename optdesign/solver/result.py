@@ -4,6 +4,8 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 
 from optdesign.outputs.tabular import Tabular
+from optdesign.mechanisms import get_mechanism
+from optdesign.outputs.units import design_units, stamped
 
 
 @dataclass
@@ -111,7 +113,6 @@ class SolveResult(Tabular):
             return None
         import numpy as np
 
-        from optdesign.mechanisms import get_mechanism
         return np.array([self.design[k] for k in get_mechanism(self.mechanism).lengths])
 
     @property
@@ -161,8 +162,6 @@ class SolveResult(Tabular):
         lengths in mm, IPOPT iterations, and why a count has no optimum."""
         import pandas as pd
 
-        from optdesign.mechanisms import get_mechanism
-
         lengths = get_mechanism(self.mechanism).lengths
         rows = []
         for p in self.per_phase:
@@ -177,8 +176,6 @@ class SolveResult(Tabular):
     def to_dict(self) -> dict:
         """The contract's keys, then ``schema_version`` and ``units``
         (:func:`optdesign.outputs.units.stamped`)."""
-        from optdesign.outputs.units import design_units, stamped
-
         out = asdict(self)
         out["per_phase"] = [p.to_dict() for p in self.per_phase]
         out["sensitivities"] = self.sensitivities

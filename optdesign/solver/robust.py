@@ -19,6 +19,9 @@ from optdesign.quantities.criteria import (TOL_ANGLE_DEG, TOL_RATIO, LengthConst
                                            constraints_of)
 from optdesign.solver.nlp import SCENARIO_SLOTS, Held
 from optdesign.solver.verify import Verification
+from optdesign.tolerance.exact_part import exact_part
+from optdesign.tolerance.parts import box_of
+from optdesign.tolerance.worst_case import worst_case
 
 #: a robust solve ends when the tolerance box's worst δ exceeds the NLP's bound t by less
 ROBUST_TOL = 1e-6
@@ -30,8 +33,6 @@ def worst_cases(problem, values) -> tuple:
     """The tolerance analysis of ``values``: the worst part for δ and for the transmission
     angle (:func:`optdesign.tolerance.worst_case.worst_case`), and the box's corners that
     break a constraint on the lengths or the ratio floor (:func:`corner_violations`)."""
-    from optdesign.tolerance.worst_case import worst_case
-
     tolerances = problem.sections["tolerances"]
     return tuple(worst_case(problem, values, tolerances, quantity=q)
                  for q in ("ripple", "transmission_angle")), corner_violations(problem, values)
@@ -93,8 +94,6 @@ def corner_violations(problem, values) -> dict[str, tuple[float, tuple[float, ..
     offsets)} of those broken.
     A constraint linear in the lengths is worst at a corner; the ratio is monotone in each
     length over so small a box."""
-    from optdesign.tolerance.exact_part import exact_part
-    from optdesign.tolerance.parts import box_of
 
     box = box_of(problem, values, problem.sections["tolerances"])
     dims = box.toleranced

@@ -9,6 +9,7 @@ import numpy as np
 
 from optdesign.outputs.units import design_units, stamped
 from optdesign.tolerance.montecarlo import summary
+from optdesign.figures.design import pyplot
 
 
 def tolerance_document(problem, box, tolerances, frame, worst_delta, worst_angle,
@@ -92,8 +93,6 @@ def plot_tolerance(frame, doc: dict, title: str | None = None):
     nominal, for δ and μ the worst case over the box, and the file's least angle and ratio
     where they fall inside the spread marked."""
     from matplotlib.ticker import MaxNLocator
-
-    from optdesign.figures.design import pyplot
 
     plt = pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))

@@ -21,6 +21,7 @@ from typing import Mapping
 
 from optdesign.declarations import Key, names
 from optdesign.mechanisms import get_mechanism, known
+from optdesign.errors import ProblemError
 
 DEFAULT_TOLERANCE_MM = 0.05
 DISTRIBUTIONS = ("uniform", "normal")
@@ -85,8 +86,6 @@ class ToleranceSection:
     def check_problem(self, problem) -> None:
         """Every named length is one of the mechanism's, and no tolerance reaches a length's
         least value (a part of zero or negative length)."""
-        from optdesign.errors import ProblemError
-
         mech = problem.model
         for name in self.lengths:
             if name not in mech.lengths:

@@ -214,8 +214,12 @@ def stationary_angles(curves: Curves, run: Run, phi: np.ndarray, df: np.ndarray)
     out = []
     for i in range(xs.size - 1):
         if ds[i] * ds[i + 1] < 0:
-            out.append(brentq(slope, xs[i], xs[i + 1], xtol=1e-14,
-                              rtol=4 * np.finfo(float).eps))
+            try:
+                out.append(brentq(slope, xs[i], xs[i + 1], xtol=1e-14,
+                                  rtol=4 * np.finfo(float).eps))
+            except ValueError:  # the grid's sign change lost again in rounding (lengths of
+                a, b = slope(xs[i]), slope(xs[i + 1])           # 1e16 mm): the flatter end
+                out.append(xs[i] if abs(a) <= abs(b) else xs[i + 1])
     return out
 
 

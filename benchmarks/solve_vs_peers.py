@@ -256,7 +256,7 @@ class DesignerModel:
         mech = problem.model
         if problem.mechanism not in ("fourbar_converter", "slotted_lever"):
             raise SystemExit(f"no designer's model for {problem.mechanism}")
-        if problem.constraints.grashof or any(hasattr(s, "solve_constraints")
+        if problem.constraints.own.get("grashof") or any(hasattr(s, "solve_constraints")
                                               for s in problem.sections.values()):
             raise SystemExit("the designer's model knows no Grashof or section constraints")
         self.lengths = list(mech.lengths)
@@ -340,7 +340,7 @@ class DesignerModel:
             g.append(self.min_ratio + RATIO_MARGIN - ratio)
         p = {k: full[:, j] for j, k in enumerate(self.lengths)}
         if self.problem.mechanism == "fourbar_converter":
-            need = self.problem.constraints.min_pin_radius
+            need = self.problem.constraints.own.get("min_pin_radius", 0.0)
             pin = p["l2"] - p["l2_prime"] if self.opts.get("pin_layout", "collinear") == \
                 "collinear" else p["l2_prime"]
             if need > 0:

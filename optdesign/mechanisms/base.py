@@ -15,6 +15,7 @@ from typing import ClassVar, Mapping
 import casadi as ca
 import numpy as np
 
+from optdesign.declarations import Key
 from optdesign.envelope.sampled import STROKE_SIGNS  # noqa: F401  (a mechanism's strokes)
 from optdesign.numerics.lanes import Lanes
 
@@ -73,9 +74,24 @@ class Mechanism(ABC):
         ``joints`` (name -> 2-vector, for drawings) and ``links`` (pairs of joint names).
         """
 
-    #: keys of the ``constraints:`` section this mechanism understands beyond the general ones
-    #: (declared in ``optdesign.problem.loader.CONSTRAINT_KEYS``, read generically by the loader)
-    constraint_keys: ClassVar[frozenset[str]] = frozenset()
+    #: the ``constraints:`` keys this mechanism owns beyond the general ones, each declared
+    #: once here (type, default, unit, range, meaning): the loader reads them by these
+    #: declarations into ``constraints.own``, the reference, the schema and ``init`` list them
+    constraint_declarations: ClassVar[tuple[Key, ...]] = ()
+    #: the result tables' columns this mechanism's constraints add (``LengthConstraint``'s
+    #: ``column``), with their units: every document's ``units`` block names them
+    column_units: ClassVar[Mapping[str, str]] = {}
+
+    @property
+    def constraint_keys(self) -> frozenset[str]:
+        """The names of :attr:`constraint_declarations`."""
+        return frozenset(k.name for k in self.constraint_declarations)
+
+    def constraint_values(self, constraints) -> dict:
+        """Each of this mechanism's own constraint keys at its value in ``constraints``
+        (the loader's ``Constraints``), its declared default where the file gives none."""
+        given = getattr(constraints, "own", None) or {}
+        return {k.name: given.get(k.name, k.default) for k in self.constraint_declarations}
 
     def criteria(self, constraints, options: Mapping[str, str]) -> list:
         """This mechanism's own constraints (:class:`optdesign.quantities.criteria.LengthConstraint`),

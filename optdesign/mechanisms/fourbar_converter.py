@@ -15,6 +15,7 @@ import math
 
 import casadi as ca
 
+from optdesign.declarations import Key
 from optdesign.errors import ProblemError
 from optdesign.mechanisms.base import Mechanism, OptionSpec, VariableSpec
 from optdesign.mechanisms.geometry import angle_of, circle_intersection, unit
@@ -78,7 +79,15 @@ class FourBarConverter(Mechanism):
             links += [("A", f"C{i}"), (f"C{i}", f"B{i}"), (f"O{i}", f"B{i}")]
         return {"theta": theta, "cos_mu": cos_mu, "joints": joints, "links": links}
 
-    constraint_keys = frozenset({"min_pin_radius", "grashof"})
+    constraint_declarations = (
+        Key("min_pin_radius", "number", "least pin radius |AC_i| of the disc (l2 − l2_prime, "
+            "or l2_prime under pin_layout: text): the pins must fit on the disc", unit="mm",
+            default=0.0, lower=0),
+        Key("grashof", "bool", "chain 1 (O A B1 O1) a Grashof crank-rocker with l1 the crank",
+            default=False),
+    )
+    column_units = {"pin_radius": "mm (|AC_i|: l2 - l2_prime, or l2_prime under pin_layout: "
+                                  "text)"}
 
     @staticmethod
     def pin_radius(lengths, options) -> float:
@@ -91,9 +100,10 @@ class FourBarConverter(Mechanism):
         chain 1 (O A B1 O1) is a Grashof crank-rocker with l1 the crank, s + l <= p + q,
         written as l1 + X <= (sum of the other two) for each X of l0, l2, l3 so that no max()
         is needed (summing two of them also gives l1 <= l0, l2, l3)."""
+        own = self.constraint_values(constraints)
         out = [LengthConstraint("pin_radius", lambda p: self.pin_radius(p, options),
-                                lower=constraints.min_pin_radius, column="pin_radius")]
-        if constraints.grashof:
+                                lower=own["min_pin_radius"], column="pin_radius")]
+        if own["grashof"]:
             for k in ("l0", "l2", "l3"):
                 out.append(LengthConstraint(
                     f"grashof[{k}]",

@@ -2,7 +2,7 @@
 
 The tree is assembled from what the loader itself reads: the tables of
 :mod:`optdesign.problem.loader` (top level, objective, regulation, solver, constraints), the
-mechanism's ``variables``, ``options``, ``strokes`` and ``constraint_keys``, and the
+mechanism's ``variables``, ``options``, ``strokes`` and ``constraint_declarations``, and the
 ``DECLARATION`` of each section module registered in ``SECTION_PARSERS``. The generated
 reference (docs/problem-file.md), the JSON Schema and ``optdesign init`` are written from it.
 """
@@ -44,14 +44,16 @@ def option_keys(mech) -> tuple[Key, ...]:
 
 def constraint_keys(mech) -> tuple[Key, ...]:
     """The ``constraints:`` keys a file with this mechanism may give: the general ones, the
-    mechanism's own (``constraint_keys``), those of the sections and a bound per quantity."""
-    accepted = GENERAL_CONSTRAINT_KEYS | set(mech.constraint_keys) | EXTRA_CONSTRAINT_KEYS | \
-        set(known_quantities())
+    mechanism's own (its ``constraint_declarations``), those of the sections and a bound per
+    quantity."""
+    accepted = GENERAL_CONSTRAINT_KEYS | EXTRA_CONSTRAINT_KEYS | set(known_quantities())
     missing = accepted - {k.name for k in CONSTRAINT_KEYS}
     if missing:
-        raise LookupError(f"constraint keys {sorted(missing)} of {mech.name} are not declared "
-                          f"in optdesign.problem.loader.CONSTRAINT_KEYS")
-    return tuple(k for k in CONSTRAINT_KEYS if k.name in accepted)
+        raise LookupError(f"constraint keys {sorted(missing)} are not declared in "
+                          f"optdesign.problem.loader.CONSTRAINT_KEYS")
+    general = [k for k in CONSTRAINT_KEYS if k.name in GENERAL_CONSTRAINT_KEYS]
+    rest = [k for k in CONSTRAINT_KEYS if k.name in accepted - GENERAL_CONSTRAINT_KEYS]
+    return tuple(general) + tuple(mech.constraint_declarations) + tuple(rest)
 
 
 def section_keys() -> tuple[Key, ...]:

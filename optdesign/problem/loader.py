@@ -94,13 +94,21 @@ class Constraints:
     """Design constraints; every one is stated as g >= 0 in the NLP."""
 
     min_transmission_angle_deg: float = 40.0
-    min_pin_radius: float = 0.0
     assembly_margin: float = 1e-3       # 1 - cos²μ >= margin at every sample
-    grashof: bool = False               # chain 1 a crank-rocker: s + l <= p + q
+    #: the mechanism's own keys (``Mechanism.constraint_declarations``, e.g. the four-bar's
+    #: ``min_pin_radius`` and ``grashof``), each at its value or its declared default
+    own: Mapping[str, Any] = field(default_factory=dict)
     extra: Mapping[str, Any] = field(default_factory=dict)   # keys other modules own
     #: bounds on quantities (``constraints: {QUANTITY: {lower, upper, at}}``) other than the
     #: three that stand for older keys (optdesign.quantities.bounds)
     quantities: tuple = ()
+
+    def __getattr__(self, name: str):
+        """A mechanism's own key reads as an attribute too (``constraints.min_pin_radius``)."""
+        own = self.__dict__.get("own") or {}
+        if name in own:
+            return own[name]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
 
 @dataclass(frozen=True)
@@ -178,7 +186,7 @@ OBJECTIVE_KEYS: tuple[Key, ...] = (
 )
 
 #: constraint keys every mechanism understands; a mechanism declares its own
-#: (``Mechanism.constraint_keys``, e.g. the four-bar's pin radius and Grashof)
+#: (``Mechanism.constraint_declarations``, e.g. the four-bar's pin radius and Grashof)
 GENERAL_CONSTRAINT_KEYS = {"min_transmission_angle_deg", "assembly_margin"}
 #: constraint keys owned by other modules (e.g. the driveline), kept as given in ``extra``.
 EXTRA_CONSTRAINT_KEYS: set[str] = {"max_speed_fraction_of_critical"}
@@ -186,8 +194,8 @@ EXTRA_CONSTRAINT_KEYS: set[str] = {"max_speed_fraction_of_critical"}
 #: ``check_problem(problem)``.
 EXTRA_CONSTRAINT_SECTIONS: dict[str, str] = {"max_speed_fraction_of_critical": "driveline"}
 
-#: every ``constraints:`` key: the general ones, those a mechanism declares in its
-#: ``constraint_keys`` (the loader reads each by its declaration) and the sections' extras
+#: the ``constraints:`` keys declared here: the general ones, the sections' extras and a bound
+#: per quantity (a mechanism's own are its ``constraint_declarations``)
 CONSTRAINT_KEYS: tuple[Key, ...] = (
     Key("min_transmission_angle_deg", "number", "least transmission angle min(μ, 180° − μ) "
         "of every chain over the turn, at every listed eccentricity", unit="deg",
@@ -195,11 +203,6 @@ CONSTRAINT_KEYS: tuple[Key, ...] = (
     Key("assembly_margin", "number", "margin of assembly at every sample (1 − cos²μ for a "
         "linkage; 1 − L/XD, 1 − r1/a for the slotted lever and the pulse reducer)", unit="-",
         default=Constraints.assembly_margin, lower=0, upper=1, open_upper=True),
-    Key("min_pin_radius", "number", "least pin radius |AC_i| of the disc (l2 − l2_prime, or "
-        "l2_prime under pin_layout: text): the pins must fit on the disc", unit="mm",
-        default=Constraints.min_pin_radius, lower=0),
-    Key("grashof", "bool", "chain 1 (O A B1 O1) a Grashof crank-rocker with l1 the crank",
-        default=Constraints.grashof),
     Key("max_speed_fraction_of_critical", "number", "the cardan shaft's operating speed at "
         "most this fraction of its first critical speed (docs/driveline.md)", unit="-",
         default=None, default_text="none", lower=0, upper=1, open_lower=True, open_upper=True,
@@ -632,11 +635,13 @@ def _read_options(r, raw, mech) -> dict[str, str]:
 
 def _read_constraints(r, raw, mech, eccentricities) -> Constraints:
     raw = r.mapping(raw, "constraints")
-    own = GENERAL_CONSTRAINT_KEYS | set(mech.constraint_keys)
     quantities = set(known_quantities())
-    r.known_keys(raw, "constraints", own | EXTRA_CONSTRAINT_KEYS | quantities)
+    r.known_keys(raw, "constraints", GENERAL_CONSTRAINT_KEYS | mech.constraint_keys |
+                 EXTRA_CONSTRAINT_KEYS | quantities)
     kw = {k.name: k.read(r, raw[k.name], f"constraints.{k.name}") for k in CONSTRAINT_KEYS
-          if k.name in own and k.name in raw}
+          if k.name in GENERAL_CONSTRAINT_KEYS and k.name in raw}
+    kw["own"] = {k.name: k.read(r, raw[k.name], f"constraints.{k.name}") if k.name in raw
+                 else k.default for k in mech.constraint_declarations}
     kw["quantities"] = tuple(read_bound(r, k, raw[k], eccentricities)
                              for k in sorted(quantities) if k in raw)
     kw["extra"] = {k: v for k, v in raw.items() if k in EXTRA_CONSTRAINT_KEYS}

@@ -144,7 +144,7 @@ def test_more_phases_less_ripple():
 def test_grashof_constraints(lengths, ok):
     from optdesign.mechanisms import get_mechanism
     from optdesign.problem.loader import Constraints
-    criteria = get_mechanism("fourbar_converter").criteria(Constraints(grashof=True), {})
+    criteria = get_mechanism("fourbar_converter").criteria(Constraints(own={"grashof": True}), {})
     g = [float(c.formula(lengths)) for c in criteria if c.name.startswith("grashof")]
     assert len(g) == 3
     assert (min(g) >= 0) is ok
@@ -156,7 +156,7 @@ def test_pin_radius_follows_the_pin_layout(layout, radius):
     owns the formula, so a report never computes it from key names."""
     from optdesign.mechanisms import get_mechanism
     from optdesign.problem.loader import Constraints
-    (pin,) = get_mechanism("fourbar_converter").criteria(Constraints(min_pin_radius=60),
+    (pin,) = get_mechanism("fourbar_converter").criteria(Constraints(own={"min_pin_radius": 60}),
                                                          {"pin_layout": layout})
     assert pin.formula(dict(l0=225, l1=20, l2=225, l2_prime=100, l3=56)) == radius
     assert pin.bounds(None) == (60, float("inf"))

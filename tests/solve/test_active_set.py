@@ -16,7 +16,9 @@ def disc():
 
 
 def _delta(problem, **changes):
-    c = replace(problem.constraints, **changes)
+    own = {k: v for k, v in changes.items() if k in problem.constraints.own}
+    c = replace(problem.constraints, own={**problem.constraints.own, **own},
+                **{k: v for k, v in changes.items() if k not in own})
     return solve_phase(replace(problem, constraints=c), 6, workers=1).delta
 
 
@@ -60,7 +62,8 @@ def test_a_pin_radius_held_at_zero_and_a_length_on_its_bound_are_warned_of(disc)
     from optdesign.solver.outputs import summary_text
 
     problem, _ = disc
-    loose = replace(problem, constraints=replace(problem.constraints, min_pin_radius=0.0),
+    own = {**problem.constraints.own, "min_pin_radius": 0.0}
+    loose = replace(problem, constraints=replace(problem.constraints, own=own),
                     design=problem.design | {"l2": replace(problem.design["l2"], upper=300.0)})
     text = summary_text(solve(loose), loose)
     assert "warning: pin_radius is held at 0 mm" in text

@@ -20,8 +20,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from optdesign.errors import ProblemError, shown
-from optdesign.problem.loader import Problem, Reader, problem_from_dict
-from optdesign.problem.loader import load_problem as _load_file
+from optdesign.problem.loader import Problem, Reader, load_problem as _load_file, problem_from_dict
 
 __all__ = ["analyze", "as_problem", "load_problem", "pareto", "plot_front", "plot_mechanism",
            "plot_speeds", "sensitivities", "solve"]

@@ -47,7 +47,7 @@ def test_solve_returns_a_result_that_shows_itself():
     result = solve(LEVER)
     assert result.status == "optimal"
     frame = result.to_frame()
-    assert list(frame["phases"]) == [3, 5]
+    assert list(frame["count"]) == list(frame["sections"]) == [3, 5]   # the lever's count
     assert {"delta", "ratio", "XD_mm", "L_mm", "best"} <= set(frame.columns)
     assert frame["best"].sum() == 1
     html = result._repr_html_()

@@ -121,8 +121,8 @@ def test_the_accuracy_figure_labels_do_not_overlap():
 
 def _front() -> pd.DataFrame:
     ratio = np.linspace(0.8, 0.85, 5)
-    rows = [{"phases": n, "ratio": r + 0.02 * (n == 6), "delta": 0.1 + r, "l1": 20 + 80 * (r - 0.8),
-             "l3": 30.0, "status": "optimal", "count_front": True}
+    rows = [{"count": n, "phases": n, "ratio": r + 0.02 * (n == 6), "delta": 0.1 + r,
+             "l1": 20 + 80 * (r - 0.8), "l3": 30.0, "status": "optimal", "count_front": True}
             for n in (4, 6) for r in ratio]
     df = pd.DataFrame(rows)
     df.attrs["knee"] = 7

@@ -19,7 +19,7 @@ from optdesign.problem.keys import constraint_keys, problem_keys, section_keys, 
 from optdesign.problem.schema import problem_schema
 from optdesign.problem.yaml_text import parse
 from optdesign.problem.reference import REGENERATE, reference_markdown
-from optdesign.problem.starter import STARTERS, starter_text
+from optdesign.problem.starter import starter_text
 from tests.conftest import ROOT, base_problem
 
 MECHANISMS = known()
@@ -47,7 +47,7 @@ def test_every_mechanism_declares_its_constraint_keys_and_has_a_starter():
         mech = get_mechanism(mechanism)
         declared = {k.name for k in constraint_keys(mech)}     # raises for an undeclared one
         assert set(mech.constraint_keys) <= declared
-        assert set(STARTERS[mechanism]["design"]) == {v.name for v in mech.variables}
+        assert set(mech.starter["design"]) == {v.name for v in mech.variables}
 
 
 def test_every_section_declares_the_keys_its_parser_reads():

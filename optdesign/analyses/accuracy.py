@@ -25,12 +25,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from optdesign.quantities.criteria import objective_of
-from optdesign.evaluation.design import Design
-from optdesign.envelope.sampled import StrokeFigures, output_envelope, sampled_figures
 from optdesign.envelope.exact import DEFAULT_GRID, exact_figures
-from optdesign.envelope.sampled import driving_speeds
+from optdesign.envelope.sampled import (StrokeFigures, driving_speeds, output_envelope,
+                                        sampled_figures)
+from optdesign.evaluation.design import Design
 from optdesign.figures.design import place_labels, pyplot
+from optdesign.quantities.criteria import objective_of
 from optdesign.solver import solve, verify
 from optdesign.solver.driver import PhaseSolver
 from optdesign.solver.verify import start_guess

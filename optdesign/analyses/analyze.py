@@ -5,15 +5,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from optdesign.evaluation.design import Design
 from optdesign.envelope.sampled import StrokeFigures
 from optdesign.errors import ProblemError
+from optdesign.evaluation.design import Design
 from optdesign.evaluation.figures import evaluate
-from optdesign.quantities import design_quantities
-from optdesign.evaluation.regulation import worst_over_range
+from optdesign.evaluation.regulation import curve_over_range, worst_over_range
 from optdesign.outputs.tabular import Tabular
-from optdesign.evaluation.regulation import curve_over_range
 from optdesign.outputs.units import design_units, gear_ratio_text, stamped
+from optdesign.quantities import design_quantities
 from optdesign.quantities.criteria import Measured
 from optdesign.solver.verify import checks
 

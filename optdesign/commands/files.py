@@ -77,10 +77,10 @@ def write_report(result, problem, out_dir, problem_path=None,
     knee = result.knee
     if knee is not None:
         values = {k: float(knee[k]) for k in problem.model.lengths}
-        values[problem.model.count_variable] = int(knee["phases"])
+        values[problem.model.count_variable] = int(knee["count"])
         design = Design.from_problem(problem, values)
         images["knee_mechanism.png"] = save_figure(
-            plot_mechanism(design, title=f"knee design, n = {int(knee['phases'])}"),
+            plot_mechanism(design, title=f"knee design, n = {int(knee['count'])}"),
             out / "knee_mechanism.png")
         images["knee_speeds.png"] = save_figure(
             plot_speeds(design, problem.stroke, problem.input_speed,

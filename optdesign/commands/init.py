@@ -19,12 +19,12 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     from optdesign.errors import UsageError, shown
     from optdesign.mechanisms import known
-    from optdesign.problem.starter import STARTERS, starter_text
+    from optdesign.problem.starter import starter_text, starters
 
     if args.mechanism not in known():
         raise UsageError(f"--mechanism: unknown mechanism {shown(args.mechanism)}; known: "
                          f"{', '.join(known())}")
-    if args.mechanism not in STARTERS:
+    if args.mechanism not in starters():
         raise UsageError(f"--mechanism: no starting design is known for {args.mechanism}")
     if args.out is None:
         print(starter_text(args.mechanism), end="")

@@ -27,9 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from optdesign.declarations import REQUIRED, Key, names
-from optdesign.errors import ProblemError
+from optdesign.declarations import Key, REQUIRED, names
 from optdesign.driveline import model
+from optdesign.errors import ProblemError
 
 TUBE_KEYS = ("outer_diameter_mm", "wall_mm", "youngs_modulus_gpa", "density_kg_m3")
 DIRECT_KEYS = ("mass_per_length_kg_m", "EI_n_m2")

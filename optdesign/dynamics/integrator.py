@@ -27,8 +27,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from optdesign.dynamics.model import DriveModel, Mode, TWO_PI
 from optdesign.errors import SolveError
-from optdesign.dynamics.model import TWO_PI, DriveModel, Mode
 
 IMPLICIT = ("Radau", "BDF", "LSODA")
 GRAZE = 1e-9            # free flights shorter than this fraction of a turn are grazes

@@ -39,11 +39,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from optdesign.numerics.buffered import BufferedCall
-from optdesign.errors import ProblemError
-from optdesign.envelope.sampled import STROKE_SIGNS
 from optdesign.dynamics.section import DynamicsSection, LoadTable
 from optdesign.envelope.exact import exact_figures
+from optdesign.envelope.sampled import STROKE_SIGNS
+from optdesign.errors import ProblemError
+from optdesign.numerics.buffered import BufferedCall
 
 TWO_PI = 2.0 * np.pi
 #: state vector: crank angle, crank speed, output angle, output speed, motor work, load work.

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from optdesign.declarations import REQUIRED as REQUIRED_KEY, Key
+from optdesign.declarations import Key, REQUIRED as REQUIRED_KEY
 from optdesign.errors import ProblemError
 
 METHODS = ("Radau", "BDF", "LSODA", "RK45")

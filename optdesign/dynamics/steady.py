@@ -25,15 +25,15 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from optdesign.evaluation.design import Design
-from optdesign.envelope.sampled import StrokeFigures
 from optdesign.dynamics.instants import first_turn_instants, steady_instants
 from optdesign.dynamics.integrator import Integrator, Trace
-from optdesign.dynamics.model import TWO_PI, DriveModel, Mode
+from optdesign.dynamics.model import DriveModel, Mode, TWO_PI
 from optdesign.dynamics.result import SimulationResult
 from optdesign.dynamics.section import DynamicsSection
 from optdesign.dynamics.verdict import LONGEST_PERIOD, held_whole_turn, judge
 from optdesign.envelope.exact import exact_figures
+from optdesign.envelope.sampled import StrokeFigures
+from optdesign.evaluation.design import Design
 
 
 def simulate(problem, section: DynamicsSection | None = None, method: str | None = None,

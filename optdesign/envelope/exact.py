@@ -14,8 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from optdesign.envelope.sampled import StrokeFigures
-from optdesign.envelope.sampled import STROKE_SIGNS
+from optdesign.envelope.sampled import STROKE_SIGNS, StrokeFigures
 
 TWO_PI = 2 * np.pi
 DEFAULT_GRID = 1024

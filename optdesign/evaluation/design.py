@@ -7,9 +7,9 @@ from typing import Mapping
 
 import numpy as np
 
-from optdesign.numerics.buffered import buffered
 from optdesign.errors import AssemblyError
 from optdesign.mechanisms import get_mechanism
+from optdesign.numerics.buffered import buffered
 
 #: |cos μ| may exceed 1 by this much and still count as assembled: none, since past 1 the
 #: floored square root of geometry.circle_intersection puts a spurious spike in the speed

@@ -13,10 +13,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from optdesign.evaluation.design import Design
+from optdesign.envelope.exact import DEFAULT_GRID, Run, exact_figures, search_grid
 from optdesign.envelope.sampled import StrokeFigures, driving_speeds
 from optdesign.errors import AssemblyError, ProblemError
-from optdesign.envelope.exact import DEFAULT_GRID, Run, exact_figures, search_grid
+from optdesign.evaluation.design import Design
 from optdesign.evaluation.regulation import RangeWorst, worst_over_range
 
 

@@ -14,8 +14,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from optdesign.errors import AssemblyError, ProblemError
 from optdesign.envelope.exact import exact_figures, search_grid
+from optdesign.errors import AssemblyError, ProblemError
 
 #: eccentricities of the coarse scan over the interval (ends included)
 SCAN_POINTS = 17

@@ -42,11 +42,11 @@ from typing import Mapping
 import casadi as ca
 import numpy as np
 
-from optdesign.evaluation.design import Design
-from optdesign.errors import ProblemError
-from optdesign.evaluation.figures import Evaluation, evaluate, evaluate_problem
-from optdesign.envelope.exact import (TOGGLE_STEP, TWO_PI, Curves, search_grid, stationary_angles,
+from optdesign.envelope.exact import (Curves, TOGGLE_STEP, TWO_PI, search_grid, stationary_angles,
                                       toggles)
+from optdesign.errors import ProblemError
+from optdesign.evaluation.design import Design
+from optdesign.evaluation.figures import Evaluation, evaluate, evaluate_problem
 from optdesign.mechanisms import get_mechanism
 
 #: extremes whose values agree to this (relative) are one extreme reached at several points:

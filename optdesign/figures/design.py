@@ -9,8 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from optdesign.envelope.sampled import output_envelope
-from optdesign.envelope.sampled import STROKE_SIGNS
+from optdesign.envelope.sampled import STROKE_SIGNS, output_envelope
 
 
 def pyplot():

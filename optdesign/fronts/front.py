@@ -6,19 +6,26 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from optdesign.outputs.tabular import Tabular
 from optdesign.fronts.axis import Axis
 from optdesign.fronts.indicators import indicators, non_dominated, objectives
 from optdesign.fronts.refine import VERIFIED
+from optdesign.outputs.tabular import Tabular
 from optdesign.outputs.units import stamped
 from optdesign.quantities import known
 
-#: leading columns of pareto.csv (docs/contract.md names the first nine); the
+#: leading columns of pareto.csv after the count, which the mechanism names (docs/contract.md
+#: names the first nine: the four-bar's ``phases``, δ, ratio, its lengths, ``status``); the
 #: mechanism's own design keys replace l0 .. l3 for other mechanisms
-LEAD = ["phases", "delta", "ratio"]
-TAIL = ["status", "min_transmission_angle_deg", "pin_radius", "ratio_multiplier", "epsilon",
+LEAD = ["delta", "ratio"]
+#: after the lengths; the problem's criteria add their columns after the transmission angle
+#: (the four-bar's ``pin_radius``)
+TAIL = ["status", "min_transmission_angle_deg", "ratio_multiplier", "epsilon",
         "kind", "count_front", "non_dominated", "binding", "ipopt_status", "iterations",
         "time_s", "round", "start_from", "merged"]
+#: the count under its generic name, and under the four-bar's name for every mechanism for one
+#: release (a slotted lever's front has ``sections``, ``count`` and the deprecated ``phases``)
+GENERIC_COUNT = "count"
+DEPRECATED_COUNT = "phases"
 #: quantities with columns of their own already: delta, ratio, min_transmission_angle_deg
 ENVELOPE_QUANTITIES = ("ratio", "ripple", "transmission_angle")
 
@@ -29,38 +36,53 @@ def quantity_columns() -> list[str]:
     return [name for name in known() if name not in ENVELOPE_QUANTITIES]
 
 
-def frame(records: list[dict], lengths: list[str], axis: Axis = Axis()):
-    """DataFrame of the grid-point records, sorted by phase count and ε (refined points
-    among the others).
+def columns_of(count_name: str, lengths, criteria_columns=()) -> list[str]:
+    """Every column of a front's table, in order: the count by its mechanism's name, δ, the
+    ratio, the lengths, the status and the least transmission angle, the criteria's own
+    columns, the rest of the sweep's, a column per other quantity, the generic count (and
+    its deprecated name), the row's ε index."""
+    tail = TAIL[:2] + list(criteria_columns) + TAIL[2:]
+    generic = [GENERIC_COUNT] + ([DEPRECATED_COUNT] if count_name != DEPRECATED_COUNT else [])
+    return [count_name] + LEAD + list(lengths) + tail + quantity_columns() + generic + ["index"]
 
-    ``count_front``: non-dominated among the feasible points of its own phase count;
+
+def frame(records: list[dict], lengths: list[str], axis: Axis = Axis(),
+          count_name: str = "phases", criteria_columns=()):
+    """DataFrame of the grid-point records, sorted by count and ε (refined points among the
+    others).
+
+    ``count_front``: non-dominated among the feasible points of its own count;
     ``non_dominated``: non-dominated among the feasible points of every count. ``round``: 0
     for the uniform pass, r >= 1 for the r-th refinement round; ``start_from``: the start
     that gave the design; ``merged``: how many other ε points reached the same design (one
-    row stands for them, :func:`optdesign.fronts.refine.visible`).
+    row stands for them, :func:`optdesign.fronts.refine.visible`). ``count_name``: the
+    mechanism's name of its count; ``criteria_columns``: the columns the problem's criteria
+    give a design (the four-bar's ``pin_radius``).
     """
     import pandas as pd
 
+    columns = columns_of(count_name, lengths, criteria_columns)
     rows = []
     for r in records:
         if isinstance(r["key"][1], str):          # the raw end-point solves: copied as points
             continue
-        row = {k: r.get(k) for k in LEAD + TAIL if k in r}
+        row = {k: r.get(k) for k in columns if k in r}
+        row.update({k: r["count"] for k in (count_name, GENERIC_COUNT, DEPRECATED_COUNT)})
         row.update({k: r["design"].get(k) if r["design"] else None for k in lengths})
         values = (r.get("quantities") or {}).get("values", {})
         row.update({k: values.get(k) for k in quantity_columns()})
         row["index"] = r["key"][1]
         rows.append(row)
-    df = pd.DataFrame(rows, columns=LEAD + list(lengths) + TAIL + quantity_columns() + ["index"])
+    df = pd.DataFrame(rows, columns=columns)
     df["count_front"] = False
     df["non_dominated"] = False
     if len(df):
-        df = df.sort_values(["phases", "epsilon", "index"], kind="stable").reset_index(
+        df = df.sort_values([GENERIC_COUNT, "epsilon", "index"], kind="stable").reset_index(
             drop=True)
         ok = df["status"].isin(VERIFIED)
         f = objectives(df.loc[ok, "delta"], gain(df.loc[ok], axis))
         df.loc[ok, "non_dominated"] = non_dominated(f)
-        for n, group in df[ok].groupby("phases"):
+        for n, group in df[ok].groupby(GENERIC_COUNT):
             g = objectives(group["delta"], gain(group, axis))
             df.loc[group.index, "count_front"] = non_dominated(g)
         if not axis.is_ratio:           # ε in the quantity's own units: the bound it held
@@ -82,9 +104,13 @@ class ParetoResult(Tabular):
 
     points: object                        # pandas DataFrame (see :func:`frame`)
     indicators: dict                      # of the non-dominated set across every count
-    per_count: dict = field(default_factory=dict)     # phases -> indicators of its own front
+    per_count: dict = field(default_factory=dict)     # count -> indicators of its own front
     run: dict = field(default_factory=dict)
     ends: list[dict] = field(default_factory=list)    # the raw end-point solves
+    #: the mechanism's name of its count (``phases``, ``sections``, ``freewheels``)
+    count_name: str = "phases"
+    #: the columns the problem's criteria add, with their units (the four-bar's pin radius)
+    criteria_columns: dict = field(default_factory=dict)
 
     @property
     def axis(self) -> Axis:
@@ -130,18 +156,19 @@ class ParetoResult(Tabular):
         ``schema_version`` and ``units``, which also give the unit of every pareto.csv
         column (the design columns in mm)."""
         df = self.points.replace({np.nan: None})
-        lengths = [c for c in self.points.columns
-                   if c not in LEAD + TAIL + quantity_columns() + ["index"]]
-        # a design holds the lengths and the count ("phases" here, "sections" in an end's
-        # design of the slotted lever)
+        known = set(columns_of(self.count_name, (), self.criteria_columns))
+        lengths = [c for c in self.points.columns if c not in known]
+        # a design holds the lengths and the count (by its mechanism's name)
         counts = {k for end in self.ends for k in (end.get("design") or {})} - set(lengths)
+        count_units = {k: "- (count)" for k in
+                       {self.count_name, GENERIC_COUNT, DEPRECATED_COUNT} | counts}
         return stamped({"run": self.run, "indicators": self.indicators,
                         "per_count": {str(k): v for k, v in self.per_count.items()},
                         "knee": None if self.knee is None else _plain(self.knee.to_dict()),
                         "points": [_plain(r) for r in df.to_dict(orient="records")],
                         "ends": self.ends},
-                       {"phases": "- (count)"} | {k: "- (count)" for k in counts}
-                       | {k: "mm" for k in lengths} | self._axis_units())
+                       count_units | dict(self.criteria_columns) | {k: "mm" for k in lengths}
+                       | self._axis_units())
 
     def _axis_units(self) -> dict:
         """On a front against another quantity than the ratio, ε is a bound on it."""
@@ -175,7 +202,7 @@ def evaluate(points, axis: Axis = Axis(), flat_below: float | None = None
     if overall["knee"] is not None:
         overall["knee"] = int(ok.index[overall["knee"]])
     per_count = {}
-    for n, group in ok.groupby("phases"):
+    for n, group in ok.groupby(GENERIC_COUNT):
         ind = indicators(group["delta"], gain(group, axis), **named)
         if ind["knee"] is not None:
             ind["knee"] = int(group.index[ind["knee"]])

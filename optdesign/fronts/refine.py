@@ -152,7 +152,7 @@ def superseded(records: list[dict]) -> list[dict]:
 
 def same_design(a: dict, b: dict, lengths: list[str]) -> bool:
     """One count, every length within :data:`SAME_LENGTH_REL`."""
-    if a.get("phases") != b.get("phases") or not a.get("design") or not b.get("design"):
+    if a.get("count") != b.get("count") or not a.get("design") or not b.get("design"):
         return False
     for k in lengths:
         x, y = a["design"].get(k), b["design"].get(k)
@@ -193,9 +193,9 @@ def visible(records: list[dict], lengths: list[str]) -> list[dict]:
     grid = [r for r in records if not isinstance(_index(r), str)]
     other = [r for r in records if isinstance(_index(r), str)]
     out = []
-    for n in sorted({r["phases"] for r in grid}):
-        mine = [r for r in grid if r["phases"] == n]
-        known = [r for r in mine if _ok(r)] + [r for r in other if r.get("phases") == n and
+    for n in sorted({r["count"] for r in grid}):
+        mine = [r for r in grid if r["count"] == n]
+        known = [r for r in mine if _ok(r)] + [r for r in other if r.get("count") == n and
                                               _ok(r)]
         for r in merge_identical(superseded(mine), lengths):
             if r.get("status") == "optimal" and _ok(r) and beater(r, known) is not None:
@@ -434,13 +434,13 @@ def plan_hypervolume(records: list[dict], lengths: list[str], settings: Refineme
         dx, dy = (gain(b) - gain(a)) / r_span, abs(b["delta"] - a["delta"]) / d_span
         if dx * dy <= settings.hypervolume_gap or settings.resolvable(a, b) < 2:
             continue
-        counts = [b["phases"]] + ([a["phases"]] if a["phases"] != b["phases"] else [])
+        counts = [b["count"]] + ([a["count"]] if a["count"] != b["count"] else [])
         ta, tb = (_angle(_slope(p), r_span, d_span) for p in (a, b))
         turns = ta is None or tb is None or abs(ta - tb) > settings.max_turn_deg
         jobs = []
         for n in counts:
             lo, hi = gain(a), gain(b)
-            inside = [t for t in records if t.get("phases") == n and
+            inside = [t for t in records if t.get("count") == n and
                       t.get("epsilon") is not None and lo < t["epsilon"] < hi]
             if any(not _ok(t) or gain(t) < _less(gain(b))
                    for t in inside):
@@ -449,8 +449,8 @@ def plan_hypervolume(records: list[dict], lengths: list[str], settings: Refineme
                 hi = min(hi, t["epsilon"])          # the count's front jumps up to b
             if (hi - lo) / r_span * dy <= settings.hypervolume_gap:
                 continue
-            start = b if n == b["phases"] else a
-            also = [a["design"]] if n == b["phases"] == a["phases"] and turns else []
+            start = b if n == b["count"] else a
+            also = [a["design"]] if n == b["count"] == a["count"] and turns else []
             jobs.append((n, lo, hi, start["design"], also))
         if jobs:
             candidates.append((dx * dy, jobs, settings.resolvable(a, b)))
@@ -461,7 +461,7 @@ def plan_hypervolume(records: list[dict], lengths: list[str], settings: Refineme
     index = {}
     for r in records:
         if not isinstance(_index(r), str):
-            index[r["phases"]] = max(index.get(r["phases"], least_index), _index(r) + 1)
+            index[r["count"]] = max(index.get(r["count"], least_index), _index(r) + 1)
     for t in again:
         index[t.count] = max(index.get(t.count, least_index), t.task.index + 1)
     out = []
@@ -480,8 +480,8 @@ def _beaten_again(records: list[dict], lengths: list[str], least_index: int
     """Re-solves, at the start of a hypervolume round, of every point a design found since
     beats on its own ε-problem and not re-solved yet (outside the round's budget)."""
     out = []
-    for n in sorted({r["phases"] for r in records if not isinstance(_index(r), str)}):
-        mine = [r for r in records if r.get("phases") == n and not isinstance(_index(r), str)]
+    for n in sorted({r["count"] for r in records if not isinstance(_index(r), str)}):
+        mine = [r for r in records if r.get("count") == n and not isinstance(_index(r), str)]
         attempted = {r.get("replaces") for r in mine if r.get("replaces") is not None}
         shown = merge_identical([r for r in superseded(mine) if _ok(r)], lengths)
         index = max([least_index] + [_index(r) + 1 for r in mine])

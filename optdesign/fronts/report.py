@@ -14,10 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
+from optdesign.figures.design import pyplot
 from optdesign.fronts.axis import Axis
 from optdesign.fronts.indicators import REFERENCE
 from optdesign.fronts.refine import LOCAL, MAX_ROUNDS, VERIFIED
-from optdesign.figures.design import pyplot
 
 MARKERS = "osD^v<>p*h"
 
@@ -30,7 +30,7 @@ def plot_fronts(points, ax=None, title: str | None = None, axis: Axis = Axis()):
     x = axis.name
     fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(figsize=(7.5, 5))
     ok = points[points["status"].isin(VERIFIED)]
-    for j, (n, g) in enumerate(ok.groupby("phases")):
+    for j, (n, g) in enumerate(ok.groupby("count")):
         front = g[g["count_front"]].sort_values(x)
         line, = ax.plot(front[x], front["delta"], marker=MARKERS[j % len(MARKERS)],
                         ms=5, lw=1.4, label=f"n = {n} ({len(front)} points)")
@@ -53,7 +53,7 @@ def plot_fronts(points, ax=None, title: str | None = None, axis: Axis = Axis()):
     if "knee" in points.attrs and points.attrs["knee"] is not None:
         k = points.loc[points.attrs["knee"]]
         ax.plot(k[x], k["delta"], "*", ms=16, color="crimson", mec="black",
-                label=f"knee (n = {int(k['phases'])})")
+                label=f"knee (n = {int(k['count'])})")
     ax.set_xlabel(axis_label(axis))
     ax.set_ylabel("ripple δ (exact)")
     ax.set_title(title or f"ripple against {axis.name}, per phase count")
@@ -90,7 +90,7 @@ def plot_lengths(points, bounds: dict, axes=None, title: str | None = None,
     ok = points[points["status"].isin(VERIFIED)]
     knee = points.attrs.get("knee")
     for ax, name in zip(axes, names):
-        for j, (n, g) in enumerate(ok.groupby("phases")):
+        for j, (n, g) in enumerate(ok.groupby("count")):
             front = g[g["count_front"]].sort_values(axis.name)
             ax.plot(front[axis.name], front[name], marker=MARKERS[j % len(MARKERS)], ms=4.5,
                     lw=1.3, label=f"n = {n}")
@@ -139,6 +139,11 @@ def run_info(problem, result, problem_path=None, command: str | None = None) -> 
             "resumed_points": result.run.get("resumed_points", 0),
             "finished_utc": datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC"),
             "command": command or ""}
+
+
+def _unit(text: str) -> str:
+    """A unit without its explanation: ``"mm (l2 - l2_prime)"`` reads ``mm``."""
+    return text.split(" (")[0]
 
 
 def _fmt(v, digits=4):
@@ -208,7 +213,7 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
         out.append(("p", f"One design only: no trade-off between δ and the {x} in these "
                          "bounds, and no hypervolume to report."))
     best = "largest" if axis.sign > 0 else "least"
-    limits = [(e["phases"], axis.value_of(e), e.get("ratio_limited_by", ""))
+    limits = [(e["count"], axis.value_of(e), e.get("ratio_limited_by", ""))
               for e in result.ends if e.get("kind") == axis.end and e.get("status") == "optimal"]
     if limits:
         out.append(("h2", f"What limits the {x}"))
@@ -222,14 +227,15 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
     if knee is not None:
         out.append(("h2", "The knee design (best compromise)"))
         out.append(("p", knee_reason(result)))
-        out.append(("p", f"n = {int(knee['phases'])}: " + ", ".join(
+        out.append(("p", f"n = {int(knee['count'])}: " + ", ".join(
             f"{k} = {knee[k]:.3f} mm" for k in lengths) +
             f"; δ = {knee['delta']:.5f}, ratio = {knee['ratio']:.5f}"
             + ("" if axis.is_ratio else f", {x} = {knee[x]:.5g} {axis.unit}") +
             ", least transmission "
             f"angle {knee['min_transmission_angle_deg']:.2f}°" +
-            (f", pin radius {knee['pin_radius']:.2f} mm" if knee.get("pin_radius") ==
-             knee.get("pin_radius") and knee.get("pin_radius") is not None else "") +
+            "".join(f", {c.replace('_', ' ')} {knee[c]:.2f} {_unit(u)}"
+                    for c, u in result.criteria_columns.items()
+                    if knee.get(c) == knee.get(c) and knee.get(c) is not None) +
             (f", local slope dδ/d ratio = {knee['ratio_multiplier']:.4g}"
              if knee.get("ratio_multiplier") == knee.get("ratio_multiplier") and
              knee.get("ratio_multiplier") is not None else "") + "."))
@@ -237,12 +243,14 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
         out.append(("img", "knee_speeds.png", images.get("knee_speeds.png")))
     out.append(("h2", "Non-dominated designs (over every phase count)"))
     extra = [] if axis.is_ratio else [x]
-    cols = ["phases", "delta", "ratio"] + extra + lengths + [
-        "min_transmission_angle_deg", "pin_radius", "ratio_multiplier", "binding", "status"]
+    own = list(result.criteria_columns)
+    cols = ["count", "delta", "ratio"] + extra + lengths + [
+        "min_transmission_angle_deg"] + own + ["ratio_multiplier", "binding", "status"]
     head = ["n", "δ", "ratio"] + [f"{x} [{axis.unit}]" for x in extra] + [
-        f"{k} [mm]" for k in lengths] + [
-        "μ_min [°]", "pin radius [mm]", "dδ/d ratio", "binding", "status"]
-    rows = [[_fmt(r[c], 5 if c in ("delta", "ratio") else 3) if c != "phases" else
+        f"{k} [mm]" for k in lengths] + ["μ_min [°]"] + [
+        f"{c.replace('_', ' ')} [{_unit(result.criteria_columns[c])}]" for c in own] + [
+        "dδ/d ratio", "binding", "status"]
+    rows = [[_fmt(r[c], 5 if c in ("delta", "ratio") else 3) if c != "count" else
              int(r[c]) for c in cols] for _, r in result.front.iterrows()]
     out.append(("table", head, rows))
     local = result.points[result.points["status"] == LOCAL]
@@ -251,13 +259,13 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
                          f"design of their phase count meets their ε with less ripple, and a "
                          f"re-solve from it did not reach it; their status is local, not "
                          f"optimal, and the better design is on the front: "
-                         + "; ".join(f"n = {int(r.phases)}, ε = {r.epsilon:.5g}, δ = "
-                                     f"{r.delta:.5f}" for r in local.itertuples())))
+                         + "; ".join(f"n = {int(r['count'])}, ε = {r['epsilon']:.5g}, δ = "
+                                     f"{r['delta']:.5f}" for _, r in local.iterrows())))
     failed = result.points[~result.points["status"].isin(VERIFIED)]
     if len(failed):
         out.append(("p", f"{len(failed)} sweep point(s) reached no verified feasible design: "
-                         + "; ".join(f"n = {int(r.phases)}, ε = {r.epsilon:.4f}: {r.status}"
-                                     for r in failed.itertuples())))
+                         + "; ".join(f"n = {int(r['count'])}, ε = {r['epsilon']:.4f}: "
+                                     f"{r['status']}" for _, r in failed.iterrows())))
     out.append(("h2", "How the run was made"))
     out.append(("table", ["", ""], [[k, _fmt(v)] for k, v in info.items()]))
     return out
@@ -282,8 +290,8 @@ def jumps(result) -> list[list]:
     for (_, a), (_, b) in zip(front.iloc[:-1].iterrows(), front.iloc[1:].iterrows()):
         if span <= 0 or abs(b[x] - a[x]) <= JUMP_SHARE * span:
             continue
-        if a["phases"] != b["phases"]:
-            why = f"the phase count changes (n = {int(a['phases'])} to {int(b['phases'])})"
+        if a["count"] != b["count"]:
+            why = f"the phase count changes (n = {int(a['count'])} to {int(b['count'])})"
         else:
             ba = {t.strip() for t in str(a.get("binding") or "").split(";") if t.strip()}
             bb = {t.strip() for t in str(b.get("binding") or "").split(";") if t.strip()}
@@ -397,7 +405,7 @@ def summary_text(result) -> str:
     knee = result.knee
     if knee is not None:
         axis = result.axis
-        lines.append(f"knee: n = {int(knee['phases'])}, δ = {knee['delta']:.5f}, ratio = "
+        lines.append(f"knee: n = {int(knee['count'])}, δ = {knee['delta']:.5f}, ratio = "
                      f"{knee['ratio']:.5f}" + ("" if axis.is_ratio else
                                                f", {axis.name} = {knee[axis.name]:.5g} "
                                                f"{axis.unit}"))

@@ -25,11 +25,11 @@ from dataclasses import dataclass, replace
 
 from optdesign.declarations import Key, names
 from optdesign.fronts.axis import choices as axis_choices
-from optdesign.quantities import get_quantity
 from optdesign.fronts.refine import (DEFAULT_DELTA_RESOLUTION, DEFAULT_HYPERVOLUME_GAP,
                                      DEFAULT_HYPERVOLUME_POINTS, DEFAULT_MAX_GAP,
                                      DEFAULT_MAX_POINTS, DEFAULT_MAX_TURN_DEG, GAIN_RESOLUTION_REL,
                                      HYPERVOLUME_ROUNDS, MAX_ROUNDS, Refinement)
+from optdesign.quantities import get_quantity
 
 DEFAULT_POINTS = 12
 MAX_POINTS = 1000

@@ -1,7 +1,7 @@
 """The sweep's journal: ``points.jsonl``, one JSON object a line, appended and fsynced as each
 point finishes, so a killed run loses nothing that was written and ``--resume`` can continue.
 
-A line is a *record*: ``{"key": [phases, tag], ...}``, tag ``"least_ripple"`` or
+A line is a *record*: ``{"key": [count, tag], ...}``, tag ``"least_ripple"`` or
 ``"largest_ratio"`` for the two end-point solves of a phase count and the integer grid index
 for the ε points. The first line holds the run's settings (``{"key": "run", ...}``) and resume
 refuses a journal written for other settings, and a damaged one (no settings line, a line in
@@ -139,7 +139,7 @@ class Journal:
 
 
 #: a record's fields and their types (None allowed where a point has no verified design)
-FIELDS = {"phases": (int,), "kind": (str,), "status": (str,), "feasible": (bool,),
+FIELDS = {"count": (int,), "kind": (str,), "status": (str,), "feasible": (bool,),
           "design": (dict,), "delta": (int, float, type(None)),
           "ratio": (int, float, type(None)), "epsilon": (int, float, type(None))}
 
@@ -147,14 +147,16 @@ FIELDS = {"phases": (int,), "kind": (str,), "status": (str,), "feasible": (bool,
 def _missing(rec: dict) -> str:
     """What is wrong with a record's fields ('' when nothing): one missing or of the wrong
     type, a key whose count is not the record's, a feasible record without its figures."""
+    if "count" not in rec and "phases" in rec:      # a journal written before "count"
+        rec["count"] = rec["phases"]
     for name, types in FIELDS.items():
         if name not in rec:
             return f"the record has no {name}"
         value = rec[name]
         if not isinstance(value, types) or (isinstance(value, bool) and bool not in types):
             return f"the record's {name} is not a {types[0].__name__}"
-    if rec["key"][0] != rec["phases"]:
-        return f"the record's key names count {rec['key'][0]}, its phases {rec['phases']}"
+    if rec["key"][0] != rec["count"]:
+        return f"the record's key names count {rec['key'][0]}, its count {rec['count']}"
     if rec["feasible"] and (rec["delta"] is None or rec["ratio"] is None or not rec["design"]):
         return "a feasible record without its design, delta or ratio"
     return ""
@@ -162,7 +164,7 @@ def _missing(rec: dict) -> str:
 
 def _record(line: str) -> dict | None:
     """The record a journal line holds, or None when it holds none (not JSON, not an object,
-    no key, a key that is neither ``"run"`` nor ``[phases, tag]``)."""
+    no key, a key that is neither ``"run"`` nor ``[count, tag]``)."""
     try:
         rec = json.loads(line)
     except json.JSONDecodeError:

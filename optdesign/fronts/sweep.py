@@ -25,18 +25,17 @@ from pathlib import Path
 
 import numpy as np
 
-from optdesign.errors import ProblemError
-from optdesign.fronts import worker
-from optdesign.errors import OptDesignError
-from optdesign.lifetime import die_with_parent, raise_if_terminated
-from optdesign.fronts.files import write_front
-from optdesign.fronts import refine
+from optdesign.errors import OptDesignError, ProblemError
+from optdesign.fronts import refine, worker
 from optdesign.fronts.axis import axis_of, with_axis
-from optdesign.fronts.front import ParetoResult, evaluate, frame
-from optdesign.fronts.seeds import ScreenedCount
-from optdesign.fronts.section import DEFAULT_POINTS, ParetoSection
-from optdesign.fronts.store import Journal
 from optdesign.fronts.cluster import connect
+from optdesign.fronts.files import write_front
+from optdesign.fronts.front import ParetoResult, evaluate, frame
+from optdesign.fronts.section import DEFAULT_POINTS, ParetoSection
+from optdesign.fronts.seeds import ScreenedCount
+from optdesign.fronts.store import Journal
+from optdesign.lifetime import die_with_parent, raise_if_terminated
+from optdesign.quantities.criteria import result_columns
 from optdesign.solver import verify
 
 #: pareto.csv/json are rebuilt from the journal at most this often while points come in (a
@@ -437,7 +436,7 @@ def _reverify(problem, done: dict, journal: Journal) -> None:
             continue
         where = f"{journal.path}: line {journal.line_of.get(key, '?')}"
         design = dict(rec["design"])
-        design.setdefault(problem.model.count_variable, rec["phases"])
+        design.setdefault(problem.model.count_variable, rec["count"])
         try:
             ver = verify(problem, design)
         except (OptDesignError, KeyError, TypeError, ValueError, ArithmeticError) as exc:
@@ -460,9 +459,11 @@ def _rebuild(problem, done: dict, out: Path, settings: dict) -> ParetoResult:
     axis = axis_of(problem)
     section = problem.sections.get("pareto") or ParetoSection()
     records = refine.visible(list(done.values()), list(problem.model.lengths))
-    points = frame(records, list(problem.model.lengths), axis)
+    model, columns = problem.model, result_columns(problem)
+    points = frame(records, list(model.lengths), axis, model.count_variable, list(columns))
     overall, per_count = evaluate(points, axis, section.refine.delta_resolution)
     ends = [r for r in records if isinstance(r["key"][1], str)]
-    result = ParetoResult(points, overall, per_count, run=dict(settings), ends=ends)
+    result = ParetoResult(points, overall, per_count, run=dict(settings), ends=ends,
+                          count_name=model.count_variable, criteria_columns=columns)
     write_front(result, out)
     return result

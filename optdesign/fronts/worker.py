@@ -14,11 +14,11 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from optdesign.errors import OptDesignError
-from optdesign.solver import PhaseSolver, solve_phase
-from optdesign.quantities.criteria import LengthConstraint, constraints_of
-from optdesign.quantities import design_quantities
-from optdesign.fronts.axis import axis_of
 from optdesign.evaluation.sensitivity import sensitivity_record
+from optdesign.fronts.axis import axis_of
+from optdesign.quantities import design_quantities
+from optdesign.quantities.criteria import LengthConstraint, constraints_of
+from optdesign.solver import PhaseSolver, solve_phase
 from optdesign.solver.starts import start_designs
 
 #: the ripple cap of the largest-ratio solve: loose (midrange δ never exceeds 2)
@@ -80,7 +80,9 @@ class _Point:
         gain = {} if axis.is_ratio else {       # the front's second objective, and its slope
             axis.name: value, "gain": axis.sign * value if value is not None else None,
             "gain_multiplier": None if multiplier is None else axis.sign * multiplier}
-        return {"key": [self.count, self.tag], "phases": self.count, "kind": self.kind,
+        return {"key": [self.count, self.tag], "count": self.count,
+                "phases": self.count,         # the count's name before "count", one release
+                "kind": self.kind,
                 "epsilon": self.epsilon, "status": status, "feasible": feasible,
                 "design": design,
                 "delta": figures.delta if exact else None,
@@ -285,7 +287,7 @@ def copy_end(end: dict, index: int) -> dict:
     """An end-point record re-keyed as grid point ``index`` (its ε the gain it reaches when
     it was solved without one)."""
     reached = end["gain"] if "gain" in end else end["ratio"]
-    return end | {"key": [end["phases"], index], "time_s": 0.0, "iterations": 0, "tries": 0,
+    return end | {"key": [end["count"], index], "time_s": 0.0, "iterations": 0, "tries": 0,
                   "epsilon": reached if end["epsilon"] is None else end["epsilon"]}
 
 

@@ -74,13 +74,15 @@ class Mechanism(ABC):
         ``joints`` (name -> 2-vector, for drawings) and ``links`` (pairs of joint names).
         """
 
+    #: the design ``optdesign init`` writes ({"input_speed": ..., "design": {...}}): one that
+    #: assembles over the whole turn, its lengths to optimise freed over ranges that hold it;
+    #: None: ``init`` refuses this mechanism
+    starter: ClassVar[Mapping | None] = None
+
     #: the ``constraints:`` keys this mechanism owns beyond the general ones, each declared
     #: once here (type, default, unit, range, meaning): the loader reads them by these
     #: declarations into ``constraints.own``, the reference, the schema and ``init`` list them
     constraint_declarations: ClassVar[tuple[Key, ...]] = ()
-    #: the result tables' columns this mechanism's constraints add (``LengthConstraint``'s
-    #: ``column``), with their units: every document's ``units`` block names them
-    column_units: ClassVar[Mapping[str, str]] = {}
 
     @property
     def constraint_keys(self) -> frozenset[str]:

@@ -40,6 +40,14 @@ class FourBarConverter(Mechanism):
                      minimum=2),
     )
     count_variable = "phases"
+    #: the design ``optdesign init`` starts from: it assembles over the whole turn, its lengths
+    #: to optimise freed over ranges that hold it (the paper's design, ranges of
+    #: problems/free_design.yaml)
+    starter = {"input_speed": 97.0,
+               "design": {"l0": {"lower": 100, "upper": 400, "initial": 225}, "l1": 20,
+                          "l2": {"lower": 100, "upper": 400, "initial": 225},
+                          "l2_prime": {"lower": 30, "upper": 300, "initial": 100},
+                          "l3": {"lower": 20, "upper": 150, "initial": 56}, "phases": 6}}
     regulating_variable = "l1"
     options = (
         OptionSpec("branch", ("left", "right"), "left",
@@ -86,8 +94,6 @@ class FourBarConverter(Mechanism):
         Key("grashof", "bool", "chain 1 (O A B1 O1) a Grashof crank-rocker with l1 the crank",
             default=False),
     )
-    column_units = {"pin_radius": "mm (|AC_i|: l2 - l2_prime, or l2_prime under pin_layout: "
-                                  "text)"}
 
     @staticmethod
     def pin_radius(lengths, options) -> float:
@@ -102,7 +108,10 @@ class FourBarConverter(Mechanism):
         is needed (summing two of them also gives l1 <= l0, l2, l3)."""
         own = self.constraint_values(constraints)
         out = [LengthConstraint("pin_radius", lambda p: self.pin_radius(p, options),
-                                lower=own["min_pin_radius"], column="pin_radius")]
+                                lower=own["min_pin_radius"], column="pin_radius",
+                                meaning="|AC_i|: l2 - l2_prime, or l2_prime under pin_layout: "
+                                        "text",
+                                at_zero="a pin radius of 0 puts every rod on the crank pin")]
         if own["grashof"]:
             for k in ("l0", "l2", "l3"):
                 out.append(LengthConstraint(

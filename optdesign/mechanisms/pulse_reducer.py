@@ -59,6 +59,12 @@ class PulseReducer(Mechanism):
                      minimum=1),
     )
     count_variable = "freewheels"
+    #: the design ``optdesign init`` starts from: it assembles over the whole turn, its
+    #: length to optimise freed over a range that holds it (the paper's design, the range of
+    #: problems/pulse_reducer_solve.yaml)
+    starter = {"input_speed": 97.0,
+               "design": {"r1": {"lower": 2, "upper": 40, "initial": 5}, "a": 50, "R1": 250,
+                          "freewheels": 3}}
     regulating_variable = "r1"
     strokes = ("forward",)
 

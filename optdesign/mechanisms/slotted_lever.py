@@ -52,6 +52,12 @@ class SlottedLever(Mechanism):
                                       "angle (paper: 1)", integer=True, minimum=1),
     )
     count_variable = "sections"
+    #: the design ``optdesign init`` starts from: it assembles over the whole turn, its
+    #: length to optimise freed over a range that holds it (the paper's design, the range of
+    #: problems/vergov_solve.yaml)
+    starter = {"input_speed": 0.628,
+               "design": {"XD": {"lower": 120, "upper": 600, "initial": 292}, "L": 74,
+                          "sections": 3}}
     regulating_variable = "L"
     strokes = ("forward", "reverse", "both")
 

@@ -20,8 +20,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from numbers import Number
 
-from optdesign.outputs.atomic import SCHEMA_VERSION
 from optdesign.mechanisms import REGISTRY, get_mechanism
+from optdesign.outputs.atomic import SCHEMA_VERSION
 from optdesign.quantities import get_quantity, known
 
 #: the ratio's convention, stated wherever a ratio is reported
@@ -56,11 +56,11 @@ UNITS: dict[str, str] = {
                           "is least over the regulation interval)",
     # the design and the checks
     "design": DESIGN_UNIT, "start": DESIGN_UNIT,
-    "pin_radius": "mm (l2 - l2_prime)",
     "chain": "- (chain number)",
     "margin": "the entry's unit (deg, mm or -)",
     "sensitivity": "objective per the entry's unit",
     # solve
+    "count": "- (the design's count: phases, sections or freewheels)",
     "iterations": COUNT, "starts": COUNT, "surrogate_delta": "-",
     "surrogate_gap": "- (surrogate delta - exact delta)",
     "ratio_multiplier": "- (d delta / d ratio)",

@@ -14,7 +14,7 @@ from importlib import import_module
 
 import yaml
 
-from optdesign.declarations import REQUIRED, Key
+from optdesign.declarations import Key, REQUIRED
 from optdesign.mechanisms import get_mechanism
 from optdesign.problem.loader import (CONSTRAINT_KEYS, EXTRA_CONSTRAINT_KEYS,
                                       GENERAL_CONSTRAINT_KEYS, MAX_COUNT, OBJECTIVE_KEYS,

@@ -16,15 +16,14 @@ from importlib import import_module
 from pathlib import Path
 from typing import Any, Mapping
 
-from optdesign.quantities.criteria import objectives
-from optdesign.declarations import REQUIRED, Key, names
-from optdesign.errors import ProblemError, shown
+from optdesign.declarations import Key, REQUIRED, names
 from optdesign.envelope.sampled import STROKE_SIGNS
+from optdesign.errors import ProblemError, shown
 from optdesign.mechanisms import get_mechanism, known
-from optdesign.quantities import known as known_quantities
-from optdesign.quantities.bounds import ALIASES, read_bound
-from optdesign.quantities.bounds import declarations as quantity_declarations
 from optdesign.problem.yaml_text import parse, read_text
+from optdesign.quantities import known as known_quantities
+from optdesign.quantities.bounds import ALIASES, declarations as quantity_declarations, read_bound
+from optdesign.quantities.criteria import objectives
 
 #: Optional sections parsed by the module that owns them, imported only when present:
 #: name -> "module:function(section_dict, where) -> parsed object".

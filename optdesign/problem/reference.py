@@ -10,11 +10,11 @@ against (:mod:`optdesign.problem.keys`), with a complete starting file per mecha
 """
 from __future__ import annotations
 
-from optdesign.declarations import REQUIRED, Key
+from optdesign.declarations import Key, REQUIRED
 from optdesign.mechanisms import get_mechanism, known
+from optdesign.problem.keys import flow, problem_keys, section_keys
 from optdesign.problem.loader import (MAX_COUNT, MAX_INTEGER, MAX_NAME_CHARS, MAX_TEXT_CHARS,
                                       MIN_REGULATED_FRACTION, NUMBER_MAGNITUDE, TOP_DECLARATIONS)
-from optdesign.problem.keys import flow, problem_keys, section_keys
 from optdesign.problem.starter import NoStarter, starter_text
 
 REGENERATE = "optdesign schema --markdown > docs/problem-file.md"
@@ -143,7 +143,7 @@ def _mechanism(name: str) -> str:
     try:
         example = starter_text(name)
     except NoStarter:
-        text.append(f"No starting file: {name} has no entry in `optdesign.problem.starter.STARTERS`.")
+        text.append(f"No starting file: {name} declares no `starter` design.")
     else:
         text += [f"A complete file (`optdesign init --mechanism {name}`):",
                  "```yaml\n" + example.rstrip("\n") + "\n```"]

@@ -9,10 +9,10 @@ analyze``.
 """
 from __future__ import annotations
 
-from optdesign.declarations import REQUIRED, Key
+from optdesign.declarations import Key, REQUIRED
 from optdesign.mechanisms import get_mechanism, known
-from optdesign.problem.loader import MAX_INTEGER, MAX_TEXT_CHARS, NUMBER_MAGNITUDE
 from optdesign.problem.keys import problem_keys
+from optdesign.problem.loader import MAX_INTEGER, MAX_TEXT_CHARS, NUMBER_MAGNITUDE
 from optdesign.quantities.criteria import objectives
 
 DIALECT = "https://json-schema.org/draft/2020-12/schema"

@@ -10,28 +10,9 @@ from __future__ import annotations
 
 import textwrap
 
-from optdesign.declarations import REQUIRED, Key
+from optdesign.declarations import Key, REQUIRED
 from optdesign.mechanisms import get_mechanism, known
 from optdesign.problem.keys import flow, problem_keys
-
-#: A design per mechanism that assembles over the whole turn, with lengths to optimise
-#: freed over ranges that hold it: the papers' designs (docs/papers.md) with the ranges of
-#: problems/free_design.yaml, problems/vergov_solve.yaml and problems/pulse_reducer_solve.yaml.
-STARTERS: dict[str, dict] = {
-    "fourbar_converter": {
-        "input_speed": 97.0,
-        "design": {"l0": {"lower": 100, "upper": 400, "initial": 225}, "l1": 20,
-                   "l2": {"lower": 100, "upper": 400, "initial": 225},
-                   "l2_prime": {"lower": 30, "upper": 300, "initial": 100},
-                   "l3": {"lower": 20, "upper": 150, "initial": 56}, "phases": 6}},
-    "slotted_lever": {
-        "input_speed": 0.628,
-        "design": {"XD": {"lower": 120, "upper": 600, "initial": 292}, "L": 74, "sections": 3}},
-    "pulse_reducer": {
-        "input_speed": 97.0,
-        "design": {"r1": {"lower": 2, "upper": 40, "initial": 5}, "a": 50, "R1": 250,
-                   "freewheels": 3}},
-}
 
 COMMENT_COLUMN = 44
 WIDTH = 100
@@ -50,14 +31,19 @@ class NoStarter(LookupError):
     """No starting design is known for a mechanism."""
 
 
+def starters() -> tuple[str, ...]:
+    """The mechanisms that declare a starting design (``Mechanism.starter``)."""
+    return tuple(name for name in known() if get_mechanism(name).starter is not None)
+
+
 def starter_text(mechanism: str, name: str | None = None) -> str:
     """The commented starting problem file for ``mechanism`` (``name``: the value shown,
     commented, for ``name:``, whose default is the file's stem)."""
-    if mechanism not in STARTERS:
-        raise NoStarter(f"no starting design is known for mechanism {mechanism!r}; known: "
-                        f"{', '.join(sorted(STARTERS))}")
     mech = get_mechanism(mechanism)
-    start = STARTERS[mechanism]
+    start = mech.starter
+    if start is None:
+        raise NoStarter(f"no starting design is known for mechanism {mechanism!r} (its "
+                        f"class declares no starter); known: {', '.join(starters())}")
     lines = _prose(f"optdesign problem file: {mechanism}, after {mech.source}.")
     lines += [""] + _prose(HEADER) + [""]
     for key in problem_keys(mechanism):

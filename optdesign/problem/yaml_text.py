@@ -19,8 +19,7 @@ from pathlib import Path
 import yaml
 from yaml.nodes import MappingNode, ScalarNode, SequenceNode
 
-from optdesign.errors import ProblemError
-from optdesign.errors import shown
+from optdesign.errors import ProblemError, shown
 
 MAX_FILE_BYTES = 1 << 20        # 1 MiB; the problem files in problems/ are about 1 kB
 MAX_DEPTH = 16                  # the deepest key path of the contract is 4 levels

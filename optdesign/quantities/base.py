@@ -25,8 +25,8 @@ from typing import ClassVar
 import casadi as ca
 import numpy as np
 
-from optdesign.quantities.extremes import turn_maxima
 from optdesign.envelope.exact import search_grid
+from optdesign.quantities.extremes import turn_maxima
 
 #: how a quantity's values combine: into its worst, and across its components
 COMBINE = {"max": max, "min": min}

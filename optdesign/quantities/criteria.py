@@ -172,10 +172,15 @@ class LengthConstraint(Constraint):
     ``formula(lengths)`` uses arithmetic only. Mechanisms contribute these."""
 
     def __init__(self, name: str, formula, lower: float = 0.0, upper: float = math.inf,
-                 column: str | None = None, unit: str = "mm"):
+                 column: str | None = None, unit: str = "mm", at_zero: str = "",
+                 meaning: str = ""):
         self.name, self.formula, self.lower, self.upper = name, formula, lower, upper
         self.column = column            # the result tables' column of this value, if any
         self.unit = unit                # of the formula's value: mm, or "-" for a ratio
+        self.meaning = meaning          # what the value is, in the mechanism's words
+        #: what the linkage becomes with this value held at zero, in the mechanism's words
+        #: (the summary warns of it)
+        self.at_zero = at_zero
 
     def value(self, q):
         return self.formula(q.lengths)
@@ -185,6 +190,13 @@ class LengthConstraint(Constraint):
 
     def tolerance(self, m):
         return TOL_LENGTH_REL * max(abs(v) for v in m.lengths.values())
+
+
+def result_columns(problem) -> dict[str, str]:
+    """The columns the problem's criteria add to a result table (a ``LengthConstraint`` with
+    a ``column``: the four-bar's ``pin_radius``), each with its unit and meaning."""
+    return {c.column: f"{c.unit} ({c.meaning})" if c.meaning else c.unit
+            for c in constraints_of(problem) if isinstance(c, LengthConstraint) and c.column}
 
 
 class QuantityConstraint(Constraint):

@@ -7,8 +7,8 @@ import math
 
 import numpy as np
 
-from optdesign.evaluation.design import Design
 from optdesign.envelope.exact import DEFAULT_GRID, exact_figures
+from optdesign.evaluation.design import Design
 from optdesign.evaluation.figures import eccentricities_of
 from optdesign.quantities.criteria import TOL_ANGLE_DEG, TOL_LENGTH_REL, TOL_RATIO
 

@@ -18,18 +18,18 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from optdesign.quantities.criteria import objective_of, quantity_specs
 from optdesign.envelope.sampled import STROKE_SIGNS
-from optdesign.quantities import design_quantities
 from optdesign.evaluation.sensitivity import sensitivity_record
+from optdesign.lifetime import die_with_parent
+from optdesign.quantities import design_quantities
+from optdesign.quantities.criteria import (LengthConstraint, constraints_of, objective_of,
+                                           quantity_specs)
 from optdesign.solver.accuracy import solve_accuracy
-from optdesign.solver.nlp import SECONDARY_BUDGET, Held, PhaseNLP, is_robust
+from optdesign.solver.nlp import Held, PhaseNLP, SECONDARY_BUDGET, is_robust
 from optdesign.solver.result import PhaseResult, SolveResult, StartRecord
 from optdesign.solver.robust import next_scenarios, robust_verdict, worst_cases
 from optdesign.solver.screening import line_seeds, screen
 from optdesign.solver.verify import TOL_ANGLE_DEG, Verification, start_guess, verify
-from optdesign.lifetime import die_with_parent
-from optdesign.quantities.criteria import LengthConstraint, constraints_of
 
 SUCCESS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 #: the status of a run stopped because it entered a known optimum's neighbourhood
@@ -634,7 +634,7 @@ def _fixed_infeasible(problem, count: int) -> PhaseResult | None:
 def _fill(result: PhaseResult, problem, outcome: Outcome) -> PhaseResult:
     ver, values = outcome.verification, outcome.values
     design = {k: float(values[k]) for k in problem.model.lengths}
-    design[problem.model.count_variable] = result.phases
+    design[problem.model.count_variable] = result.count
     result.status = "optimal"
     result.design = design
     result.delta = ver.delta
@@ -676,7 +676,7 @@ def solve(problem, progress=None) -> SolveResult:
         status, message = "optimal", ""
     else:
         status = "infeasible" if all(p.status == "infeasible" for p in per_phase) else "failed"
-        message = "; ".join(f"n={p.phases}: {p.message}" for p in per_phase)
+        message = "; ".join(f"n={p.count}: {p.message}" for p in per_phase)
     timings = Timings()
     for p in per_phase:
         timings.add(Timings(**p.timings) if p.timings else Timings())

@@ -42,10 +42,10 @@ from dataclasses import dataclass, field, replace
 import casadi as ca
 import numpy as np
 
-from optdesign.quantities.criteria import constraints_of, objective_of, quantity_specs
-from optdesign.evaluation.figures import eccentricities_of
 from optdesign.envelope.sampled import STROKE_SIGNS
+from optdesign.evaluation.figures import eccentricities_of
 from optdesign.quantities import TurnQuantity, get_quantity
+from optdesign.quantities.criteria import constraints_of, objective_of, quantity_specs
 
 IPOPT_OPTIONS = {
     "ipopt.print_level": 0,

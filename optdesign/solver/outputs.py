@@ -1,11 +1,11 @@
 """The plain-text account of a solve (the files themselves: :func:`optdesign.commands.files.write_solve`)."""
 from __future__ import annotations
 
-from optdesign.quantities.criteria import objective_of, quantity_specs
-from optdesign.quantities import get_quantity
 from optdesign.evaluation.sensitivity import sensitivity_line
 from optdesign.outputs.units import gear_ratio_text
-from optdesign.quantities.criteria import LengthConstraint, constraints_of
+from optdesign.quantities import get_quantity
+from optdesign.quantities.criteria import (LengthConstraint, constraints_of, objective_of,
+                                           quantity_specs)
 
 
 def summary_text(result, problem) -> str:
@@ -46,10 +46,10 @@ def summary_text(result, problem) -> str:
     for p in result.per_phase:
         if p.status == "optimal":
             gap = f"{p.surrogate_gap:+.1e}" if p.surrogate_gap is not None else "n/a"
-            lines.append(f"  n = {p.phases}: {p.status}, δ = {p.delta:.6f}, ratio = "
+            lines.append(f"  n = {p.count}: {p.status}, δ = {p.delta:.6f}, ratio = "
                          f"{p.ratio:.4f}, surrogate gap {gap}, {len(p.starts)} starts")
         else:
-            lines.append(f"  n = {p.phases}: {p.status}: {p.message}")
+            lines.append(f"  n = {p.count}: {p.status}: {p.message}")
     lines.append("every figure above is the exact evaluator's, not the NLP surrogate's")
     return "\n".join(lines)
 
@@ -67,8 +67,8 @@ def binding_text(active: list[dict], problem) -> str:
 def bound_warnings(result, problem) -> list[str]:
     """A warning per free length the optimum rests on a bound of: the design would go past
     it, so the bound shapes the result (is it a real limit, or a first guess?); and one per
-    length constraint held at zero, where the linkage degenerates (a pin radius of 0 puts
-    every rod on the crank pin)."""
+    length constraint held at zero, where the linkage degenerates (in the mechanism's words,
+    its ``at_zero``)."""
     criteria = {c.name: c for c in constraints_of(problem)}
     out = []
     for a in result.active:
@@ -76,9 +76,10 @@ def bound_warnings(result, problem) -> list[str]:
         if isinstance(criterion, LengthConstraint):
             lower, upper = criterion.bounds(problem)
             if (lower if a["side"] == "lower" else upper) == 0:
+                why = f" ({criterion.at_zero})" if criterion.at_zero else ""
                 out.append(f"warning: {a['name']} is held at 0 {a['unit']}: the linkage "
-                           f"degenerates there (a pin radius of 0 puts every rod on the crank "
-                           f"pin); give the constraint a real least value in the problem file")
+                           f"degenerates there{why}; give the constraint a real least value "
+                           f"in the problem file")
     for a in result.active:
         if a["kind"] != "bound":
             continue

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 
-from optdesign.outputs.tabular import Tabular
 from optdesign.mechanisms import get_mechanism
+from optdesign.outputs.tabular import Tabular
 from optdesign.outputs.units import design_units, stamped
 
 
@@ -30,9 +30,10 @@ class StartRecord:
 
 @dataclass
 class PhaseResult:
-    """The optimum of one phase count, re-verified by the exact evaluator."""
+    """The optimum of one count (of phases, sections, freewheels), re-verified by the exact
+    evaluator."""
 
-    phases: int
+    count: int
     status: str                  # optimal | infeasible | failed
     design: dict[str, float] | None = None
     delta: float | None = None                   # exact, worst over the listed eccentricities
@@ -63,8 +64,15 @@ class PhaseResult:
     #: ``values`` and ``per_eccentricity``); empty without an optimum
     quantities: dict = field(default_factory=dict)
 
+    @property
+    def phases(self) -> int:
+        """The count under its old name (deprecated: ``count``)."""
+        return self.count
+
     def to_dict(self) -> dict:
-        return asdict(self)
+        """Every field; the count as ``count`` and, as before, ``phases``."""
+        out = asdict(self)
+        return {"phases": out["count"]} | out
 
 
 @dataclass
@@ -158,14 +166,16 @@ class SolveResult(Tabular):
                 f"({self.solve_time_s:.2f} s)")
 
     def to_frame(self):
-        """One row per phase count: status, exact δ, ratio, least transmission angle, the
-        lengths in mm, IPOPT iterations, and why a count has no optimum."""
+        """One row per count (named by its mechanism: phases, sections, freewheels): status,
+        exact δ, ratio, least transmission angle, the lengths in mm, IPOPT iterations, and
+        why a count has no optimum."""
         import pandas as pd
 
-        lengths = get_mechanism(self.mechanism).lengths
+        model = get_mechanism(self.mechanism)
+        lengths = model.lengths
         rows = []
         for p in self.per_phase:
-            row = {"phases": p.phases, "status": p.status, "delta": p.delta, "ratio": p.ratio,
+            row = {"count": p.count, model.count_variable: p.count, "status": p.status, "delta": p.delta, "ratio": p.ratio,
                    "min_transmission_angle_deg": p.min_transmission_angle_deg}
             row |= {f"{k}_mm": (p.design or {}).get(k) for k in lengths}
             row |= {"iterations": p.iterations, "best": p.design is not None and

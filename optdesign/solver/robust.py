@@ -15,9 +15,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from optdesign.quantities.criteria import (TOL_ANGLE_DEG, TOL_RATIO, LengthConstraint, Measured,
+from optdesign.quantities.criteria import (LengthConstraint, Measured, TOL_ANGLE_DEG, TOL_RATIO,
                                            constraints_of)
-from optdesign.solver.nlp import SCENARIO_SLOTS, Held
+from optdesign.solver.nlp import Held, SCENARIO_SLOTS
 from optdesign.solver.verify import Verification
 from optdesign.tolerance.exact_part import exact_part
 from optdesign.tolerance.parts import box_of

@@ -17,12 +17,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.stats import qmc
 
+from optdesign.envelope.sampled import STROKE_SIGNS, driving_speeds
+from optdesign.evaluation.figures import eccentricities_of
+from optdesign.quantities import get_quantity
 from optdesign.quantities.criteria import (SectionConstraint, TransmissionAngle, constraints_of,
                                            objective_of, quantity_specs)
-from optdesign.envelope.sampled import driving_speeds
-from optdesign.evaluation.figures import eccentricities_of
-from optdesign.envelope.sampled import STROKE_SIGNS
-from optdesign.quantities import get_quantity
 from optdesign.quantities.extremes import lanes_of
 
 #: crank samples per turn of the screening grid: enough to rank designs (sampled δ is within

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.stats import qmc
 
-from optdesign.evaluation.design import Design
 from optdesign.errors import AssemblyError, ProblemError
+from optdesign.evaluation.design import Design
 
 
 def assembles(design: Design, eccentricities) -> bool:

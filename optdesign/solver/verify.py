@@ -12,11 +12,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from optdesign.quantities.criteria import (TOL_ANGLE_DEG, TOL_LENGTH_REL, TOL_RATIO, Measured,
-                                           SectionConstraint, constraints_of, objective_of)
 from optdesign.errors import AssemblyError
 from optdesign.evaluation.figures import Evaluation, eccentricities_of, evaluate_problem
 from optdesign.quantities import get_quantity
+from optdesign.quantities.criteria import (Measured, SectionConstraint, TOL_ANGLE_DEG,
+                                           TOL_LENGTH_REL, TOL_RATIO, constraints_of, objective_of)
 from optdesign.solver.nlp import Held
 
 #: the tolerances and the eccentricity order are the criteria's and the evaluation's; they are

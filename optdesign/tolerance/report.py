@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from optdesign.figures.design import pyplot
 from optdesign.outputs.units import design_units, stamped
 from optdesign.tolerance.montecarlo import summary
-from optdesign.figures.design import pyplot
 
 
 def tolerance_document(problem, box, tolerances, frame, worst_delta, worst_angle,

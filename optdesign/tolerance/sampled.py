@@ -23,9 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from optdesign.envelope.sampled import driving_speeds
+from optdesign.envelope.sampled import STROKE_SIGNS, driving_speeds
 from optdesign.evaluation.figures import eccentricities_of
-from optdesign.envelope.sampled import STROKE_SIGNS
 
 #: least crank samples per turn, and per driving curve (every hand-over bracketed closely)
 MIN_SAMPLES = 96

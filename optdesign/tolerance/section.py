@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 from typing import Mapping
 
 from optdesign.declarations import Key, names
-from optdesign.mechanisms import get_mechanism, known
 from optdesign.errors import ProblemError
+from optdesign.mechanisms import get_mechanism, known
 
 DEFAULT_TOLERANCE_MM = 0.05
 DISTRIBUTIONS = ("uniform", "normal")

@@ -75,14 +75,14 @@ def test_normalisation_maps_ideal_and_nadir_to_the_unit_corners():
 
 
 def _rec(n, i, delta, ratio, status="optimal"):
-    return {"key": [n, i], "phases": n, "delta": delta, "ratio": ratio, "status": status,
+    return {"key": [n, i], "count": n, "phases": n, "delta": delta, "ratio": ratio, "status": status,
             "design": {"l1": 1.0, "phases": n}}
 
 
 def test_frame_flags_each_counts_front_and_the_overall_front():
     recs = [_rec(4, 0, 0.2, 0.8), _rec(4, 1, 0.3, 0.9), _rec(6, 0, 0.1, 0.7),
             _rec(6, 1, 0.25, 0.95), _rec(6, 2, None, None, "failed"),
-            {"key": [6, "least_ripple"], "phases": 6}]
+            {"key": [6, "least_ripple"], "count": 6, "phases": 6}]
     df = frame(recs, ["l1"])
     assert len(df) == 5                                 # the raw end solve is not a row
     assert df["count_front"].tolist() == [True, True, True, True, False]

@@ -40,7 +40,7 @@ def _feasible_line(lines) -> int:
     (lambda r: r["design"].update(l3=r["design"]["l3"] + 1.0),
      r"line \d+: the record does not match its design"),
     (lambda r: r.update(key=[6, r["key"][1]]),
-     r"damaged journal \(line \d+: the record's key names count 6, its phases 4\)"),
+     r"damaged journal \(line \d+: the record's key names count 6, its count 4\)"),
     (lambda r: r.pop("delta"), r"damaged journal \(line \d+: the record has no delta\)"),
     (lambda r: r.update(feasible="yes"),
      r"damaged journal \(line \d+: the record's feasible is not a bool\)"),

@@ -23,7 +23,7 @@ LENGTHS = ["l1", "l3"]
 def rec(i, ratio, delta, mult=None, eps=None, design=None, kind="sweep", rnd=0,
         replaces=None, feasible=True):
     """A journal record of count 4 at grid index ``i`` (its design made from its figures)."""
-    out = {"key": [4, i], "phases": 4, "kind": kind, "feasible": feasible,
+    out = {"key": [4, i], "count": 4, "phases": 4, "kind": kind, "feasible": feasible,
            "status": "optimal" if feasible else "failed",
            "epsilon": ratio if eps is None else eps,
            "delta": delta if feasible else None, "ratio": ratio if feasible else None,
@@ -90,7 +90,7 @@ def test_a_gap_where_the_front_jumps_is_narrowed_then_left_alone():
 def _on(count, i, ratio, delta, **kw):
     """A record of ``count`` (``rec`` makes count 4)."""
     r = rec(i, ratio, delta, **kw)
-    r["key"], r["phases"], r["design"]["phases"] = [count, i], count, count
+    r["key"], r["count"], r["design"]["phases"] = [count, i], count, count
     return r
 
 
@@ -161,7 +161,7 @@ def test_identical_designs_are_merged_into_one_row():
     out = merge_identical(rows[1:3], LENGTHS)
     assert [r["key"][1] for r in out] == [2] and out[0]["merged"] == 1
     # another phase count is another design
-    six = rec(5, 0.8, 0.2, design=dict(d)) | {"phases": 6, "key": [6, 5]}
+    six = rec(5, 0.8, 0.2, design=dict(d)) | {"count": 6, "key": [6, 5]}
     assert len(visible(rows[:1] + [six], LENGTHS)) == 2
 
 

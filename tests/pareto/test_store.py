@@ -4,7 +4,7 @@ from optdesign.fronts.store import Journal
 
 def _rec(index, delta):
     """A record with every field a resumed journal checks (a failed point: no design)."""
-    return {"key": [4, index], "phases": 4, "kind": "sweep", "status": "failed",
+    return {"key": [4, index], "count": 4, "kind": "sweep", "status": "failed",
             "feasible": False, "design": {}, "delta": delta, "ratio": None, "epsilon": None}
 
 

@@ -20,10 +20,11 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from optdesign.errors import ProblemError, shown
-from optdesign.problem.loader import Problem, Reader, load_problem as _load_file, problem_from_dict
+from optdesign.problem.loader import (Options, Problem, Reader, load_problem as _load_file,
+                                      problem_from_dict)
 
-__all__ = ["analyze", "as_problem", "load_problem", "pareto", "plot_front", "plot_mechanism",
-           "plot_speeds", "sensitivities", "solve"]
+__all__ = ["Options", "analyze", "as_problem", "load_options", "load_problem", "pareto",
+           "plot_front", "plot_mechanism", "plot_speeds", "sensitivities", "solve"]
 
 
 def load_problem(source) -> Problem:
@@ -38,6 +39,18 @@ def load_problem(source) -> Problem:
 
 
 as_problem = load_problem
+
+
+def load_options(source) -> Options:
+    """How a problem file says to solve it (its ``solver:`` and ``pareto:``) as an
+    :class:`~optdesign.problem.loader.Options`, apart from the problem; ``source`` as
+    :func:`load_problem` takes it."""
+    return load_problem(source).method
+
+
+def _with_options(problem: Problem, options) -> Problem:
+    """``problem`` to be solved by ``options`` (an Options or a mapping; None: its own)."""
+    return problem if options is None else problem.with_options(options)
 
 
 def _design(problem: Problem, design) -> dict | None:
@@ -72,27 +85,32 @@ def sensitivities(problem, design: Mapping | None = None):
     return _sensitivities(problem, problem.start_values() | (_design(problem, design) or {}))
 
 
-def solve(problem, progress=None):
-    """The best verified design over every admissible phase count
-    (:func:`optdesign.solver.driver.solve`). ``progress``: called once per phase count."""
+def solve(problem, progress=None, *, options=None):
+    """The best verified design over every admissible count
+    (:func:`optdesign.solver.driver.solve`). ``progress``: called once per count.
+    ``options``: how to solve it, apart from the problem (:class:`Options`, or a mapping
+    ``{"solver": {...}}`` whose keys replace the file's); by default the file's own."""
     from optdesign.solver.driver import solve as _solve
 
     if progress is not None and not callable(progress):
         raise TypeError(f"progress must be a callable or None (got {type(progress).__name__})")
-    return _solve(load_problem(problem), progress=progress)
+    return _solve(_with_options(load_problem(problem), options), progress=progress)
 
 
 def pareto(problem, out=None, points: int | None = None, workers: int | None = 1,
-           resume: bool = False, scheduler=None, progress: bool = False):
-    """The front of ripple against ratio (:func:`optdesign.fronts.sweep.sweep`).
+           resume: bool = False, scheduler=None, progress: bool = False, *, options=None):
+    """The front of ripple against ratio, or against ``pareto.against``'s quantity
+    (:func:`optdesign.fronts.sweep.sweep`).
 
     ``out``: folder for the journal and pareto.csv/json (what ``--resume`` continues); by
     default a temporary folder, removed afterwards (the result is in memory). ``workers``: 1
-    (default) solves in this process, None every core."""
+    (default) solves in this process, None every core. ``options``: how to sweep it, apart
+    from the problem (:class:`Options`, or a mapping ``{"solver": {...}, "pareto": {...}}``);
+    by default the file's own."""
     from optdesign.fronts.section import DECLARATION
     from optdesign.fronts.sweep import sweep
 
-    problem = load_problem(problem)
+    problem = _with_options(load_problem(problem), options)
     r = Reader(f"{problem.source}: argument")
     if points is not None:
         points = DECLARATION.key("points").read(r, points, "points")

@@ -258,6 +258,42 @@ LENGTH_RANGE_KEYS = ("lower", "upper", "initial")
 COUNT_RANGE_KEYS = ("lower", "upper", "choices")
 
 
+#: the keys of a problem file that say how it is solved, not what is solved
+METHOD_KEYS = ("solver", "pareto")
+
+
+@dataclass(frozen=True)
+class Options:
+    """How a problem is solved, kept apart from what is solved: the solve's settings (the
+    file's ``solver:``) and the Pareto sweep's (its ``pareto:``; None: the sweep's defaults).
+    :func:`read_options` reads them from a mapping by the loader's rules, a problem's own are
+    :attr:`Problem.method`, and ``solve(problem, options=...)`` / ``pareto(...)`` take them."""
+
+    solver: SolverSettings = SolverSettings()
+    pareto: Any = None
+
+
+def read_options(data: Any, where: str = "options", base: Options | None = None) -> Options:
+    """Options given as a mapping ``{"solver": {...}, "pareto": {...}}``, each key read by the
+    loader's rules (a bad one raises :class:`ProblemError` naming it). The solver keys given
+    replace those of ``base`` (a problem's own), the rest kept; a ``pareto`` mapping is a
+    whole section (its keys not given at their defaults)."""
+    base = base or Options()
+    r = Reader(where)
+    top = r.mapping(data, "")
+    r.known_keys(top, "", set(METHOD_KEYS))
+    solver = _read_solver(r, top.get("solver", {}), base.solver)
+    pareto = base.pareto
+    if "pareto" in top:
+        pareto = _pareto_parser()(top["pareto"], r.sub("pareto"))
+    return Options(solver=solver, pareto=pareto)
+
+
+def _pareto_parser():
+    module, func = SECTION_PARSERS["pareto"].split(":")
+    return getattr(import_module(module), func)
+
+
 @dataclass(frozen=True)
 class Problem:
     """A loaded problem: what is optimised, independent of how it is solved."""
@@ -304,6 +340,33 @@ class Problem:
         return replace(self, design=design)
 
     # --------------------------------------------------------------- validated variants
+    @property
+    def method(self) -> Options:
+        """How this problem's file says to solve it (its ``solver:`` and ``pareto:``)."""
+        return Options(solver=self.solver, pareto=self.sections.get("pareto"))
+
+    def with_options(self, options) -> "Problem":
+        """The same problem to be solved another way: ``options`` an :class:`Options`, or a
+        mapping ``{"solver": {...}, "pareto": {...}}`` read by :func:`read_options` over
+        this problem's own; checked as a file is (a Pareto section's counts admissible)."""
+        if isinstance(options, Mapping):
+            options = read_options(options, f"{self.source}: options", base=self.method)
+        if not isinstance(options, Options):
+            raise TypeError(f"options are an Options or a mapping of solver: and pareto: "
+                            f"(got {type(options).__name__})")
+        if not isinstance(options.solver, SolverSettings):
+            raise TypeError(f"Options.solver is a SolverSettings (got "
+                            f"{type(options.solver).__name__})")
+        section = type(_pareto_parser()({}, Reader(self.source).sub("pareto")))
+        if options.pareto is not None and not isinstance(options.pareto, section):
+            raise TypeError(f"Options.pareto is a {section.__name__} or None (got "
+                            f"{type(options.pareto).__name__})")
+        sections = {k: v for k, v in self.sections.items() if k != "pareto"}
+        if options.pareto is not None:
+            sections["pareto"] = options.pareto
+        return _checked_variant(Reader(self.source),
+                                replace(self, solver=options.solver, sections=sections))
+
     def with_design(self, **changes) -> "Problem":
         """The problem with design keys given anew, each read by the loader's rules (a
         number fixes a length, ``{lower, upper[, initial]}`` frees it; the count an integer,
@@ -749,11 +812,12 @@ def _read_regulation(r, raw) -> tuple[tuple[float, ...], tuple[float, float] | N
     return tuple(out), None
 
 
-def _read_solver(r, raw) -> SolverSettings:
+def _read_solver(r, raw, base: SolverSettings = SolverSettings()) -> SolverSettings:
+    """``solver:``: the keys given replace those of ``base``."""
     raw = r.mapping(raw, "solver")
     r.known_keys(raw, "solver", names(SOLVER_KEYS))
-    return SolverSettings(**{k.name: k.read(r, raw[k.name], f"solver.{k.name}")
-                             for k in SOLVER_KEYS if k.name in raw})
+    return replace(base, **{k.name: k.read(r, raw[k.name], f"solver.{k.name}")
+                            for k in SOLVER_KEYS if k.name in raw})
 
 
 class Reader:

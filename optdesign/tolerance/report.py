@@ -7,8 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from optdesign.evaluation.figures import evaluate_problem
 from optdesign.figures.design import pyplot
 from optdesign.outputs.units import design_units, stamped
+from optdesign.quantities import design_quantities, get_quantity
 from optdesign.tolerance.montecarlo import summary
 
 
@@ -35,12 +37,20 @@ def tolerance_document(problem, box, tolerances, frame, worst_delta, worst_angle
         "design_source": design_source,
         "tolerances_mm": {k: float(v) for k, v in zip(box.names, box.band)},
         "nominal": {"assembles": nominal["assembles"], "delta": nominal["delta"],
-                    "ratio": nominal["ratio"], "mu_min_deg": nominal["mu_min_deg"]},
-        "worst_case": {"delta": worst_delta.to_dict(),
-                       "transmission_angle": worst_angle.to_dict()},
+                    "ratio": nominal["ratio"], "mu_min_deg": nominal["mu_min_deg"],
+                    "quantities": exact_quantities(problem, box.values)},
+        "worst_case": {name: w.to_dict() | {"quantities": exact_quantities(problem, w.lengths)}
+                       for name, w in (("delta", worst_delta),
+                                       ("transmission_angle", worst_angle))},
         "monte_carlo": monte_carlo,
     }
     return stamped(doc, design_units(problem.mechanism))
+
+
+def exact_quantities(problem, values) -> dict:
+    """Every quantity's exact value of one part (``{"values": ..., "per_eccentricity": ...}``,
+    the block of ``analyze``; empty for a part that does not assemble)."""
+    return design_quantities(problem, evaluate_problem(problem, dict(values), search=False))
 
 
 def format_tolerance(doc: dict) -> str:
@@ -73,6 +83,7 @@ def format_tolerance(doc: dict) -> str:
         lines.append(f"{label} part{state}: {where} mm"
                      + (" (a corner of the box)" if w["on_corner"] else " (inside the box)")
                      + f"; {w['exact_evaluations']} exact evaluations")
+    lines += _quantity_lines(nominal, wd, wa) + [""]
     shares = [f"not assembling {100 * mc['share_not_assembling']:.2f} %",
               f"μ below {mc['min_transmission_angle_deg']:g}° "
               f"{100 * mc['share_below_min_transmission_angle']:.2f} %"]
@@ -86,6 +97,22 @@ def format_tolerance(doc: dict) -> str:
                  f"per turn, refined and calibrated on the exact nominal; the nominal and worst "
                  f"cases are exact")
     return "\n".join(lines)
+
+
+def _quantity_lines(nominal: dict, worst_delta: dict, worst_angle: dict) -> list[str]:
+    """Each quantity of the nominal and of the two worst parts, exact, one line each."""
+    values = [(part.get("quantities") or {}).get("values", {})
+              for part in (nominal, worst_delta, worst_angle)]
+    if not values[0]:
+        return []
+    out = ["", f"{'quantity':<22}{'nominal':>12}{'worst-δ part':>14}{'least-μ part':>14}"]
+    for name in values[0]:
+        q = get_quantity(name)
+        cells = [v.get(name) for v in values]
+        out.append(f"{name:<22}" + "".join(
+            f"{'-':>{w}}" if c is None else f"{c:>{w}.6g}" for c, w in zip(cells, (12, 14, 14)))
+            + f"  {q.unit}")
+    return out
 
 
 def plot_tolerance(frame, doc: dict, title: str | None = None):

@@ -51,6 +51,23 @@ def test_files_and_keys(solved):
     assert (tmp / "out" / "tolerance.png").read_bytes()[:4] == b"\x89PNG"
 
 
+def test_every_quantity_of_the_nominal_and_of_the_worst_parts_exactly(solved):
+    """The tolerance report carries every quantity (the vocabulary of analyze), exact, of the
+    nominal and of both worst parts; the worst-δ part's ripple is its worst-case δ."""
+    from optdesign.quantities import known
+
+    doc = solved[2]
+    nominal = doc["nominal"]["quantities"]["values"]
+    assert set(nominal) == set(known())
+    assert nominal["ripple"] == pytest.approx(doc["nominal"]["delta"], rel=1e-9)
+    worst = doc["worst_case"]["delta"]
+    assert worst["quantities"]["values"]["ripple"] == pytest.approx(worst["delta"], rel=1e-9)
+    assert doc["units"]["housing_radius"] == "mm"
+    text = format_tolerance(doc)
+    row = next(line for line in text.splitlines() if line.startswith("housing_radius"))
+    assert float(row.split()[1]) == pytest.approx(nominal["housing_radius"], rel=1e-5)
+
+
 def test_the_terminal_table(solved):
     text = format_tolerance(solved[2])
     assert text.startswith("sharkov2022_disc_tolerance: tolerance analysis of the design of ")

@@ -309,3 +309,22 @@ def test_a_new_quantity_is_one_module(depth_quantity, tmp_path):
     assert least.status == "optimal" and least.quantities["values"]["depth"] < depth
     from optdesign.fronts.front import quantity_columns
     assert "depth" in quantity_columns()
+    # a front of ripple against it, from the command line: its column in pareto.csv, each
+    # point's depth held at the point's ε, each verified exactly
+    data["objective"] = {"minimize": "ripple", "min_ratio": 0.344}
+    data["pareto"] = {"points": 3, "refine": {"enabled": False}}
+    path.write_text(yaml.safe_dump(data))
+    code, _ = run_main(["pareto", path, "--against", "depth", "--out", tmp_path / "front",
+                        "--no-report", "--workers", "1"])
+    front = json.loads((tmp_path / "front" / "pareto.json").read_text())
+    assert code == 0 and front["run"]["against"] == "depth"
+    assert front["units"]["epsilon"].startswith("mm")
+    header = (tmp_path / "front" / "pareto.csv").read_text().splitlines()[0].split(",")
+    assert "depth" in header
+    held = [q for q in front["points"] if q["status"] == "optimal" and q["epsilon"] is not None]
+    assert len(held) >= 2
+    swept = load_problem(path)
+    for q in held:
+        assert q["depth"] <= q["epsilon"] * (1 + 1e-7)
+        design = {k: q[k] for k in swept.model.lengths} | {"phases": q["phases"]}
+        assert verify(swept, design).feasible

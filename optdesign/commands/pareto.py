@@ -1,5 +1,5 @@
-"""``optdesign pareto PROBLEM.yaml [--out DIR] [--points K] [--workers W] [--resume]
-[--scheduler ADDRESS] [--no-report]``."""
+"""``optdesign pareto PROBLEM.yaml [--out DIR] [--points K] [--against QUANTITY]
+[--workers W] [--resume] [--scheduler ADDRESS] [--no-report]``."""
 from __future__ import annotations
 
 import os
@@ -16,6 +16,9 @@ def add_parser(sub) -> None:
     p.add_argument("--out", help="output folder (default results/NAME_pareto/)")
     p.add_argument("--points", type=_positive(2, MAX_POINTS), help="ε values per phase count "
                                                         "(default: pareto.points, else 12)")
+    p.add_argument("--against", metavar="QUANTITY",
+                   help="trade the ripple against this quantity instead of the file's "
+                        "pareto.against (the ratio by default), e.g. housing_radius")
     p.add_argument("--workers", type=_positive(1), help="local worker processes "
                                                          "(default: every core)")
     p.add_argument("--resume", action="store_true",
@@ -24,6 +27,21 @@ def add_parser(sub) -> None:
                    help="run the points on this Dask scheduler (needs optdesign[cluster])")
     p.add_argument("--no-report", action="store_true", help="pareto.csv/json only")
     p.set_defaults(run=run)
+
+
+def _against(problem, path, name: str):
+    """The problem swept against ``name``: its file's ``pareto:`` section with ``against``
+    set, read again by the loader's rules (an unknown quantity, or ratio bounds beside
+    another quantity, is named as the file's keys are)."""
+    from optdesign.problem.loader import read_options
+    from optdesign.problem.yaml_text import parse, read_text
+
+    data = parse(read_text(Path(path)), problem.source)
+    given = data.get("pareto") if isinstance(data, dict) else None
+    section = dict(given) if isinstance(given, dict) else {}
+    section["against"] = name
+    return problem.with_options(read_options({"pareto": section},
+                                             f"{problem.source}: --against", problem.method))
 
 
 def _positive(low, high=None):
@@ -53,6 +71,8 @@ def run(args) -> int:
     from optdesign.problem.loader import load_problem
 
     problem = load_problem(args.problem)
+    if args.against is not None:
+        problem = _against(problem, args.problem, args.against)
     if not problem.free_lengths():          # nothing to trade: say so before any work
         raise ProblemError(f"{Path(args.problem).name}: design: a front needs a free length "
                            f"(give one a range, e.g. {{lower: 30, upper: 90}}); every length "
@@ -72,7 +92,8 @@ def run(args) -> int:
         files = write_front(result, out)
         if not args.no_report:
             command = " ".join(["optdesign pareto", args.problem, "--out", str(out)] + [
-                f"--{k} {getattr(args, k)}" for k in ("points", "workers", "scheduler")
+                f"--{k} {getattr(args, k)}" for k in ("points", "against", "workers",
+                                                      "scheduler")
                 if getattr(args, k)] + (["--resume"] if args.resume else []))
             files += write_report(result, problem, out, problem_path=args.problem,
                                   command=command)

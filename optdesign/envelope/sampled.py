@@ -22,6 +22,15 @@ import numpy as np
 STROKE_SIGNS: dict[str, tuple[int, ...]] = {"forward": (1,), "reverse": (-1,), "both": (1, -1)}
 
 
+def ripple_of(omega_max, omega_min, omega_mean, definition: str = "midrange"):
+    """δ = (ω_max − ω_min)/ω_mid, the coefficient of velocity fluctuation (Sharkov & Kalinin
+    2022, the formula after eq. 8), ω_mid the midrange (ω_max + ω_min)/2 (``midrange``, the
+    paper's) or the time mean (``mean``). Arithmetic only: the one formula for numbers, NumPy
+    arrays of many designs (screening, Monte Carlo) and CasADi symbols (the NLP)."""
+    mid = 0.5 * (omega_max + omega_min) if definition == "midrange" else omega_mean
+    return (omega_max - omega_min) / mid
+
+
 @dataclass(frozen=True)
 class StrokeFigures:
     """Output-speed figures of one stroke, speeds in rad/s."""
@@ -37,10 +46,13 @@ class StrokeFigures:
     @classmethod
     def from_extremes(cls, omega_max, omega_min, omega_mean, input_speed) -> "StrokeFigures":
         midrange = 0.5 * (omega_max + omega_min)
-        spread = omega_max - omega_min
+
+        def ripple(definition, mid):
+            return float(ripple_of(omega_max, omega_min, omega_mean, definition)) \
+                if mid > 0 else float("inf")
+
         return cls(float(omega_max), float(omega_min), float(midrange), float(omega_mean),
-                   float(spread / midrange) if midrange > 0 else float("inf"),
-                   float(spread / omega_mean) if omega_mean > 0 else float("inf"),
+                   ripple("midrange", midrange), ripple("mean", omega_mean),
                    float(omega_mean / input_speed))
 
     @property

@@ -17,6 +17,14 @@ ASSEMBLY_TOL = 0.0
 #: grids of at least this many angles are evaluated as NumPy lanes (CasADi's arithmetic, a
 #: fixed cost per instruction that pays from a few hundred angles on); shorter ones by CasADi
 LANES_FROM = 256
+TWO_PI = 2 * np.pi
+
+
+def _cell(phi: np.ndarray, j: int) -> tuple[float, float]:
+    """The crank angles of grid point j's two neighbours, unwrapped around it."""
+    n = phi.size
+    return (phi[j - 1] - (TWO_PI if j == 0 else 0.0),
+            phi[(j + 1) % n] + (TWO_PI if j == n - 1 else 0.0))
 
 
 @dataclass(frozen=True)
@@ -108,6 +116,17 @@ class Design:
             float(phi), self.p_fixed(eccentricity))
         return tuple(out.tolist())
 
+    def largest_cos(self, k: int, lo: float, hi: float, eccentricity: float = 1.0,
+                    xatol: float = 1e-12) -> tuple[float, float]:
+        """(angle, |cos μ_k|) of chain k's largest |cos μ| between the crank angles ``lo`` and
+        ``hi`` (the chain closest to folding there), by a bounded scalar search: the one
+        search every check, figure and sensitivity of the transmission angle refines with."""
+        from scipy.optimize import minimize_scalar
+
+        res = minimize_scalar(lambda x: -abs(self.chain_at(x % TWO_PI, k, eccentricity)[3]),
+                              bounds=(lo, hi), method="bounded", options={"xatol": xatol})
+        return float(res.x), float(-res.fun)
+
     def cos_peaks(self, phi: np.ndarray, eccentricity: float = 1.0,
                   cos_mu: np.ndarray | None = None, near: float = 1e-3):
         """Local peaks of |cos μ| of every chain with |cos μ| > 1 - ``near`` on the grid
@@ -116,24 +135,17 @@ class Design:
         Where |cos μ| peaks the chain is closest to folding (μ -> 0 or 180°); a peak above 1
         between two samples is a failure to assemble that the samples alone would miss.
         """
-        from scipy.optimize import minimize_scalar
-
         if cos_mu is None:
             cos_mu = self.sample(phi, eccentricity)["cos_mu"]
         a = np.abs(cos_mu)
-        n, two_pi = phi.size, 2 * np.pi
         out = []
         for k in range(a.shape[0]):
             row = a[k]
             for j in np.nonzero((row >= np.roll(row, 1)) & (row >= np.roll(row, -1)) &
                                 (row > 1.0 - near) & np.isfinite(row))[0]:
-                lo = phi[j - 1] - (two_pi if j == 0 else 0.0)
-                hi = phi[(j + 1) % n] + (two_pi if j == n - 1 else 0.0)
-                res = minimize_scalar(lambda x: -abs(self.chain_at(x % two_pi, k, eccentricity)[3]),
-                                      bounds=(lo, hi), method="bounded",
-                                      options={"xatol": 1e-12})
-                x, c = (res.x, -res.fun) if -res.fun > row[j] else (phi[j], row[j])
-                out.append((k, float(x % two_pi), float(c)))
+                x, c = self.largest_cos(k, *_cell(phi, j), eccentricity)
+                x, c = (x, c) if c > row[j] else (phi[j], row[j])
+                out.append((k, float(x % TWO_PI), float(c)))
         return out
 
     def check_assembly(self, eccentricity: float = 1.0, n_samples: int = 2048,
@@ -183,20 +195,14 @@ class Design:
         ``cos_mu``, or ``n_grid`` equal steps), then refined by a bounded scalar search on the
         neighbouring cells.
         """
-        from scipy.optimize import minimize_scalar
-
         if phi is None:
             phi = np.linspace(0.0, 2 * np.pi, n_grid, endpoint=False)
         if cos_mu is None:
             cos_mu = self.sample(phi, eccentricity)["cos_mu"]
-        n, two_pi = phi.size, 2 * np.pi
         worst = []
         for k in range(cos_mu.shape[0]):
             j = int(np.argmax(np.abs(cos_mu[k])))
-            lo = phi[j - 1] - (two_pi if j == 0 else 0.0)
-            hi = phi[(j + 1) % n] + (two_pi if j == n - 1 else 0.0)
-            res = minimize_scalar(lambda x: -abs(self.chain_at(x % two_pi, k, eccentricity)[3]),
-                                  bounds=(lo, hi), method="bounded", options={"xatol": 1e-10})
-            c = min(max(-res.fun, abs(cos_mu[k, j])), 1.0)
+            _, c = self.largest_cos(k, *_cell(phi, j), eccentricity, xatol=1e-10)
+            c = min(max(c, abs(cos_mu[k, j])), 1.0)
             worst.append(np.degrees(np.arccos(c)))          # min(μ, 180° - μ) = acos|cos μ|
         return np.array(worst)

@@ -44,6 +44,7 @@ import numpy as np
 
 from optdesign.envelope.exact import (Curves, TOGGLE_STEP, TWO_PI, search_grid, stationary_angles,
                                       toggles)
+from optdesign.envelope.sampled import ripple_of
 from optdesign.errors import ProblemError
 from optdesign.evaluation.design import Design
 from optdesign.evaluation.figures import Evaluation, evaluate, evaluate_problem
@@ -203,14 +204,17 @@ class _EccentricitySlopes:
     angles: dict[tuple, _Slope] = field(default_factory=dict)   # (chain, side) -> μ, deg
 
     def delta(self, definition: str) -> _Slope:
+        """δ (:func:`~optdesign.envelope.sampled.ripple_of`) and its gradient by the
+        quotient rule."""
         big, small, mean = self.omega_max, self.omega_min, self.mean
+        value = ripple_of(big.value, small.value, mean.value, definition)
         if definition == "midrange":
             total = big.value + small.value
             grad = 4.0 * (small.value * big.grad - big.value * small.grad) / total ** 2
-            return _Slope(2.0 * (big.value - small.value) / total, grad)
+            return _Slope(value, grad)
         spread = big.value - small.value
         grad = (big.grad - small.grad) / mean.value - spread * mean.grad / mean.value ** 2
-        return _Slope(spread / mean.value, grad)
+        return _Slope(value, grad)
 
     @classmethod
     def of(cls, design: Design, ev: Evaluation, x, kinks: list,
@@ -395,18 +399,14 @@ def _least_angle_points(design: Design, e: float, x, points: _Points) -> dict[tu
     from the evaluation's grid angles by a bounded search on |cos μ| (as
     :meth:`Design.transmission_angles` does). Both sides are kept: an optimum often holds
     one chain at its bound on both."""
-    from scipy.optimize import minimize_scalar
-
     if not design.model.has_transmission_angle(design.count, design.option_key):
         return {}
     least, n, h = float(x.chain_angles_deg.min()), design.count, TWO_PI / 1024
     found = {}
     for k in map(int, np.nonzero(x.chain_angles_deg <= least + ANGLE_NEAR_DEG)[0]):
         for side, start in enumerate((x.cos_extreme_angles[k], x.cos_extreme_angles[n + k])):
-            res = minimize_scalar(lambda t: -abs(design.chain_at(t % TWO_PI, k, e)[3]),
-                                  bounds=(start - h, start + h), method="bounded",
-                                  options={"xatol": 1e-12})
-            found[(k, side)] = points.add(float(res.x), (k,))
+            angle, _ = design.largest_cos(k, start - h, start + h, e)
+            found[(k, side)] = points.add(angle, (k,))
     return found
 
 

@@ -42,7 +42,7 @@ from dataclasses import dataclass, field, replace
 import casadi as ca
 import numpy as np
 
-from optdesign.envelope.sampled import STROKE_SIGNS
+from optdesign.envelope.sampled import STROKE_SIGNS, ripple_of
 from optdesign.evaluation.figures import eccentricities_of
 from optdesign.quantities import TurnQuantity, get_quantity
 from optdesign.quantities.criteria import constraints_of, objective_of, quantity_specs
@@ -535,8 +535,7 @@ class PhaseNLP:
         b.row(f"run_sums[{tag}]", sums - ca.vertcat(0, sums[:-1]) - increments)
         self._derived[f"run_sums_{tag}"] = ca.cumsum(increments)
         mean = sums[M - 1] / (2 * math.pi * e)
-        avg = 0.5 * (w_hi + w_lo) if self.problem.objective.ripple == "midrange" else mean
-        return (w_hi - w_lo) / avg, mean, w_hi, cos_sq
+        return ripple_of(w_hi, w_lo, mean, self.problem.objective.ripple), mean, w_hi, cos_sq
 
     def solver(self, hessian: str) -> ca.Function:
         """IPOPT on this NLP with the exact Hessian or L-BFGS; each built at its first use.

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.stats import qmc
 
-from optdesign.envelope.sampled import STROKE_SIGNS, driving_speeds
+from optdesign.envelope.sampled import STROKE_SIGNS, driving_speeds, ripple_of
 from optdesign.evaluation.figures import eccentricities_of
 from optdesign.quantities import get_quantity
 from optdesign.quantities.criteria import (SectionConstraint, TransmissionAngle, constraints_of,
@@ -141,9 +141,8 @@ def _evaluate(problem, count, base, free, X, sampled: dict | None = None
             env = np.maximum(f.max(axis=0), 0.0)
             hi, mean = env.max(axis=1), env.mean(axis=1)
             lo = np.minimum(env.min(axis=1), _crossings(f).min(axis=1))
-            avg = 0.5 * (hi + lo) if problem.objective.ripple == "midrange" else mean
             if e in problem.eccentricities:
-                ripples.append((hi - lo) / avg)
+                ripples.append(ripple_of(hi, lo, mean, problem.objective.ripple))
                 peaks[e] = hi * e * problem.input_speed
             if e == 1.0:
                 ratio, peak = mean, hi

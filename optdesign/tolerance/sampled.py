@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from optdesign.envelope.sampled import STROKE_SIGNS, driving_speeds
+from optdesign.envelope.sampled import STROKE_SIGNS, driving_speeds, ripple_of
 from optdesign.evaluation.figures import eccentricities_of
 
 #: least crank samples per turn, and per driving curve (every hand-over bracketed closely)
@@ -76,9 +76,9 @@ def _block(problem, count: int, lengths: np.ndarray, N: int) -> dict:
             dth, cos_mu = (np.asarray(v) for v in fmap(phi, np.repeat(P, N, axis=1)))
             f = driving_speeds(dth, problem.stroke).reshape(-1, S, N) / e
             hi, lo, mean = _envelope_figures(f)
-            mid = 0.5 * (hi + lo) if problem.objective.ripple == "midrange" else mean
             if e in problem.eccentricities:
-                delta[:, problem.eccentricities.index(e)] = (hi - lo) / mid
+                delta[:, problem.eccentricities.index(e)] = ripple_of(
+                    hi, lo, mean, problem.objective.ripple)
             if e == 1.0:
                 ratio = mean
             c = _peak_abs(cos_mu.reshape(-1, S, N))

@@ -100,6 +100,19 @@ def knee(z: np.ndarray) -> int:
                                                                               z[:, 1])))
 
 
+def value_knee(front: np.ndarray, sign: float = 1.0) -> int | None:
+    """Index of the knee of a front ``(δ, −gain)`` on the values' own scales: the design of
+    the most gain per unit of ripple, the largest ``sign·ln(value) − ln δ`` (value = sign·gain,
+    the quantity itself: the ratio, or a housing radius with sign −1). Past it each per cent
+    more of the quantity costs more than a per cent more ripple (the elasticity
+    d ln δ / d ln value crosses 1 there), before it less. None where a value or a δ is not
+    positive (no per cent to speak of): the chord's knee then stands."""
+    delta, value = front[:, 0], -sign * front[:, 1]
+    if len(front) < 2 or not (np.all(delta > 0) and np.all(value > 0)):
+        return None
+    return int(np.argmax(sign * np.log(value) - np.log(delta)))
+
+
 def indicators(delta, ratio, ideal=None, nadir=None, name: str = "ratio",
                sign: float = 1.0, flat_below: float | None = None) -> dict:
     """Hypervolume, spacing and knee of the non-dominated subset of (δ, ratio) points; a
@@ -107,21 +120,29 @@ def indicators(delta, ratio, ideal=None, nadir=None, name: str = "ratio",
     ``ratio`` may be any gain (larger better) of the quantity ``name``, gain = sign·value:
     the ideal and the nadir then name the quantity's own values.
 
-    A front whose δ spans less than ``flat_below`` (the δ resolution a designer reads) is
-    *flat*: δ is the same to them over the whole front, the normalised knee would pick a bend
-    of noise, so the knee is the end of the largest gain (``flat`` true)."""
+    The knee is :func:`value_knee`'s, on the values' own scales (``knee_rule``
+    ``"per_ripple"``), else the chord's in the normalised front (``"chord"``). A front whose δ
+    spans less than ``flat_below`` (the δ resolution a designer reads) is *flat*: δ is the
+    same to them over the whole front, so the knee is the end of the largest gain (``flat``
+    true, ``knee_rule`` ``"flat"``)."""
     f = objectives(delta, ratio)
     mask = non_dominated(f) if len(f) else np.zeros(0, bool)
     front = f[mask]
     if len(front) == 0:
         return {"n_points": 0, "hypervolume": 0.0, "spacing": float("nan"), "knee": None,
-                "flat": False}
+                "flat": False, "knee_rule": None}
     flat = flat_below is not None and len(front) > 1 and \
         float(np.ptp(front[:, 0])) < flat_below
     z, ideal, nadir = normalise(front, ideal, nadir)
-    k = int(np.argmin(front[:, 1])) if flat else knee(z)
+    by_value = None if flat else value_knee(front, sign)
+    if flat:
+        k, rule = int(np.argmin(front[:, 1])), "flat"
+    elif by_value is not None:
+        k, rule = by_value, "per_ripple"
+    else:
+        k, rule = knee(z), "chord"
     single = len(front) == 1        # no trade-off: the normalisation has nothing to span
-    return {"n_points": int(len(front)), "flat": bool(flat),
+    return {"n_points": int(len(front)), "flat": bool(flat), "knee_rule": rule,
             "hypervolume": None if single else hypervolume_2d(z),
             "spacing": None if single else spacing(z),
             "knee": int(np.flatnonzero(mask)[k]),

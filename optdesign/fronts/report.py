@@ -200,8 +200,8 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
                      "point is (0, 0) and the nadir (1, 1) of the front judged; hypervolume "
                      f"to the reference point {REFERENCE} in that space (at most "
                      f"{REFERENCE[0] * REFERENCE[1]:.2f}); spacing is Schott's (0 for evenly "
-                     "spaced points); the knee is the point farthest from the chord between "
-                     "the front's two ends, towards the ideal."))
+                     f"spaced points); the knee is the design of the most {x} per unit of "
+                     f"ripple, on the values' own scales (below)."))
     rows = [["every n", ind["n_points"], _fmt(ind["hypervolume"]), _fmt(ind["spacing"]),
              _nadir(ind, x)]]
     for n, v in result.per_count.items():
@@ -321,10 +321,29 @@ def knee_reason(result) -> str:
         return (f"The front is flat: δ is the same within {result.resolution:g} (the δ "
                 f"resolution) over {span}, so the knee is the end of the {best} {x}: take it, "
                 f"it costs no ripple a designer can read.")
-    text = (f"The front spans δ {ideal['delta']:.5f}–{nadir['delta']:.5f} over {span}; the "
-            f"knee is the design farthest from the chord between its two ends, on both "
-            f"spans scaled to one: the bend where more {x} starts to cost most ripple.")
+    d_lo, d_hi = ideal["delta"], nadir["delta"]
+    relative = (f" (δ by {100 * (d_hi - d_lo) / d_lo:.3g} %, {x} by "
+                f"{100 * (hi - lo) / abs(lo):.3g} %)" if d_lo > 0 and lo != 0 else "")
+    text = f"The front spans δ {d_lo:.5f}–{d_hi:.5f} over {span}{relative}; "
     knee, end = result.knee, result.front.iloc[-1 if axis.sign > 0 else 0]
+    if ind.get("knee_rule") == "per_ripple":
+        per = "more" if axis.sign > 0 else "less"
+        text += (f"the knee is the design of the most {x} per unit of ripple ({x}"
+                 f"{'/' if axis.sign > 0 else '·'}δ {'largest' if axis.sign > 0 else 'least'})")
+        start = result.front.iloc[0 if axis.sign > 0 else -1]
+        if knee is not None and knee.name == end.name:
+            text += (f", the {best}-{x} end: all along the front each per cent {per} {x} costs "
+                     f"less than a per cent more ripple, so take it.")
+        elif knee is not None and knee.name == start.name:
+            text += (f", the least-ripple end: all along the front each per cent {per} {x} "
+                     f"costs more than a per cent more ripple.")
+        else:
+            text += (f": towards it each per cent {per} {x} costs less than a per cent more "
+                     f"ripple, past it more.")
+    else:
+        text += (f"the knee is the design farthest from the chord between its two ends, on "
+                 f"both spans scaled to one (a {x} or a δ that is not positive has no per "
+                 f"cent to trade).")
     if knee is not None and end.name != knee.name and knee["delta"] > 0 and knee[x] != 0:
         more = abs(end[x] - knee[x]) / abs(knee[x])
         cost = (end["delta"] - knee["delta"]) / knee["delta"]

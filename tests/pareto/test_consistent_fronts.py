@@ -107,7 +107,10 @@ def test_the_report_says_where_the_front_jumps_and_why():
     (row,) = jumps(result)
     assert row[:2] == ["0.595", "0.68917"] and "branch" in row[-1]
     text = knee_reason(result)
-    assert "The largest-ratio end of the front, ratio 0.68917" in text
+    # on the values' own scales δ moves by 0.5 % while the ratio moves by 21 %: the design of
+    # the most ratio per unit of ripple is the largest-ratio end, and the report says why
+    assert result.knee["ratio"] == pytest.approx(0.689169)
+    assert "(δ by 0.5 %, ratio by 21.3 %)" in text and "ratio/δ largest" in text
     # flat at a coarser resolution: the knee is the largest-ratio end, and it says so
     overall, per_count = evaluate(points, flat_below=1e-3)
     flat = ParetoResult(points, overall, per_count, run={"refine": {"delta_resolution": 1e-3}})

@@ -89,3 +89,23 @@ def test_frame_flags_each_counts_front_and_the_overall_front():
     # n = 4's (0.3, 0.9) loses to n = 6's (0.25, 0.95)
     assert df["non_dominated"].tolist() == [True, False, True, True, False]
 
+
+
+def test_the_knee_on_the_values_own_scales_is_the_most_gain_per_ripple():
+    """δ 0.1047 -> 0.1052 (0.5 %) while the ratio goes 0.568 -> 0.689 (21 %): the normalised
+    chord would pick a bend of that 0.5 %; per unit of ripple the largest ratio wins. On a
+    front where δ doubles for 2 % more ratio the least-δ end wins; for a quantity that is better
+    small (a housing radius, sign −1) the least radius·δ."""
+    from optdesign.fronts.indicators import value_knee
+
+    ratio = np.array([0.568, 0.575, 0.6, 0.65, 0.689])
+    delta = np.array([0.1047, 0.10476, 0.1049, 0.1051, 0.1052])
+    assert value_knee(objectives(delta, ratio)) == 4
+    assert indicators(delta, ratio)["knee_rule"] == "per_ripple"
+    steep = np.array([0.1, 0.15, 0.2, 0.3, 0.4])
+    assert value_knee(objectives(steep, np.linspace(0.80, 0.816, 5))) == 0
+    radius = np.array([382.0, 250.0, 167.6, 130.0, 110.0])
+    rip = np.array([0.0996, 0.13, 0.2039, 0.35, 0.5018])
+    # radius·δ: 38.0, 32.5, 34.2, 45.5, 55.2
+    assert value_knee(objectives(rip, -radius), sign=-1.0) == 1
+    assert value_knee(objectives(delta, ratio - 0.6)) is None      # a ratio below zero

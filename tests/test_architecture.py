@@ -215,6 +215,28 @@ def test_a_new_mechanism_is_one_class_and_one_registry_line(monkeypatch):
     assert figures.omega_max == pytest.approx(0.5 * 10.0, rel=1e-12)
 
 
+def test_a_new_mechanism_runs_through_the_command_line(monkeypatch, tmp_path):
+    """The same class, solved from a problem file by ``optdesign solve``: the count is the
+    mechanism's (``rockers``), the solve picks the count of least ripple (δ falls with n)."""
+    import json
+
+    from tests.conftest import run_main
+
+    monkeypatch.setitem(REGISTRY, "sine_rockers", "tests.test_architecture:SineRockers")
+    path = tmp_path / "sine.yaml"
+    path.write_text(yaml.safe_dump({
+        "mechanism": "sine_rockers", "input_speed": 10.0,
+        "design": {"a": {"lower": 20.0, "upper": 60.0, "initial": 50.0},
+                   "rockers": {"choices": [3, 5]}}}))
+    code, _ = run_main(["solve", path, "--out", tmp_path / "out", "--no-plots"])
+    result = json.loads((tmp_path / "out" / "result.json").read_text())
+    c = math.cos(math.pi / 5)
+    assert code == 0 and result["status"] == "optimal" and result["design"]["rockers"] == 5
+    assert result["delta"] == pytest.approx(2 * (1 - c) / (1 + c), rel=1e-9)
+    assert [p["count"] for p in result["per_phase"]] == [3, 5]
+    assert result["units"]["rockers"] == "-"
+
+
 # --------------------------------------------------------------------------- a new section
 @dataclass(frozen=True)
 class RpmSection:

@@ -81,6 +81,17 @@ class Key:
         """The nested key ``name`` of a mapping."""
         return next(k for k in self.keys if k.name == name)
 
+    def read_given(self, reader, raw, wanted) -> tuple[dict, dict]:
+        """A section's opening: ``raw`` (None: empty) checked as a mapping of this key's
+        known keys, then each of ``wanted`` that it gives read by its declaration. Returns
+        (the mapping, ``{"source": reader.where, name: value, ...}``)."""
+        raw = reader.mapping({} if raw is None else raw, "")
+        reader.known_keys(raw, "", names(self.keys))
+        given = {"source": reader.where}
+        given.update({name: self.key(name).read(reader, raw[name], name)
+                      for name in wanted if name in raw})
+        return raw, given
+
     def sample(self):
         """A value that satisfies the key: its default, else its example."""
         return self.default if self.default not in (None, REQUIRED) else self.example

@@ -118,12 +118,8 @@ class ParetoSection:
 
 def parse_section(raw, reader) -> ParetoSection:
     """Strict reading of ``pareto:`` (``reader`` names the file and the key path in errors)."""
-    raw = reader.mapping({} if raw is None else raw, "")
-    reader.known_keys(raw, "", KEYS)
-    kw = {"source": reader.where}
-    for key in ("points", "against", "ratio_lower", "ratio_upper"):
-        if key in raw:
-            kw[key] = DECLARATION.key(key).read(reader, raw[key], key)
+    raw, kw = DECLARATION.read_given(reader, raw, ("points", "against", "ratio_lower",
+                                                  "ratio_upper"))
     if kw.get("against", "ratio") != "ratio":
         for key in ("ratio_lower", "ratio_upper"):
             if key in kw:

@@ -106,12 +106,8 @@ class ToleranceSection:
 
 def parse_section(raw, reader) -> ToleranceSection:
     """Strict reading of ``tolerances:`` (``reader`` names the file and the key path)."""
-    raw = reader.mapping({} if raw is None else raw, "")
-    reader.known_keys(raw, "", KEYS)
-    kw = {"source": reader.where}
-    for key in ("default", "distribution", "k", "samples", "seed"):
-        if key in raw:
-            kw[key] = DECLARATION.key(key).read(reader, raw[key], key)
+    raw, kw = DECLARATION.read_given(reader, raw, ("default", "distribution", "k", "samples",
+                                                  "seed"))
     if raw.get("lengths") is not None:
         items = reader.mapping(raw["lengths"], "lengths")
         declared = DECLARATION.key("lengths")

@@ -167,10 +167,18 @@ def parse(text: str, where: str):
             from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
-        line = f" at line {mark.line + 1}" if mark is not None else ""
-        raise ProblemError(f"{where}: not valid YAML{line}") from None
+        at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+        reason = _one_line(getattr(exc, "problem", None) or "")
+        raise ProblemError(f"{where}: not valid YAML{at}" + (f": {reason}" if reason else "")) \
+            from None
     except RecursionError:          # pragma: no cover - MAX_DEPTH keeps far below the limit
         raise ProblemError(f"{where}: nests too deep") from None
     finally:
         if loader is not None:
             loader.dispose()
+
+
+def _one_line(text: str, most: int = 160) -> str:
+    """The parser's reason as one printable line of at most ``most`` characters."""
+    flat = " ".join("".join(c if c.isprintable() else "?" for c in str(text)).split())
+    return flat if len(flat) <= most else flat[:most - 1] + "…"

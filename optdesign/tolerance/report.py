@@ -93,6 +93,10 @@ def format_tolerance(doc: dict) -> str:
         shares.append(f"δ above {mc['max_ripple']:g} "
                       f"{100 * mc['share_above_max_ripple']:.2f} %")
     lines.append("parts: " + "; ".join(shares))
+    if mc["share_not_assembling"] > 0 or mc["share_below_min_transmission_angle"] > 0:
+        lines.append("some parts break the angle rule or do not assemble: `objective: {robust: "
+                     "worst_case}` in the problem file sizes a design whose every part of this "
+                     "box assembles and keeps the rule (docs/formulation.md, \"Robust solve\")")
     lines.append(f"Monte Carlo {mc['wall_time_s']:.2f} s on {mc['crank_samples']} crank samples "
                  f"per turn, refined and calibrated on the exact nominal; the nominal and worst "
                  f"cases are exact")

@@ -68,6 +68,22 @@ def test_every_quantity_of_the_nominal_and_of_the_worst_parts_exactly(solved):
     assert float(row.split()[1]) == pytest.approx(nominal["housing_radius"], rel=1e-5)
 
 
+def test_parts_that_break_a_rule_point_at_the_robust_solve(solved):
+    """A box whose parts all keep the rules says nothing more; one where some break the angle
+    rule names the objective that sizes a design for the whole box."""
+    doc = solved[2]
+    hint = "objective: {robust: worst_case}"
+    assert (hint in format_tolerance(doc)) == \
+        (doc["monte_carlo"]["share_below_min_transmission_angle"] > 0 or
+         doc["monte_carlo"]["share_not_assembling"] > 0)
+    failing = {**doc, "monte_carlo": {**doc["monte_carlo"],
+                                      "share_below_min_transmission_angle": 0.837}}
+    assert hint in format_tolerance(failing)
+    quiet = {**doc, "monte_carlo": {**doc["monte_carlo"], "share_not_assembling": 0.0,
+                                    "share_below_min_transmission_angle": 0.0}}
+    assert hint not in format_tolerance(quiet)
+
+
 def test_the_terminal_table(solved):
     text = format_tolerance(solved[2])
     assert text.startswith("sharkov2022_disc_tolerance: tolerance analysis of the design of ")

@@ -29,7 +29,7 @@ def test_design_space_notebook_executes(small_front, small_path, monkeypatch):
     text = "".join(o.get("text", "") for o in outputs)
     assert "non-dominated designs, hypervolume" in text and "feasible: True" in text
     images = [o for o in outputs if "image/png" in o.get("data", {})]
-    assert len(images) >= 4             # fronts, lengths, speeds, mechanism
+    assert len(images) == 4             # fronts, lengths, speeds, mechanism: each once
     tables = [o for o in outputs if "text/html" in o.get("data", {})]
     assert any("non-dominated designs" in o["data"]["text/html"] for o in tables)
     source = "".join(c.source for c in nb.cells if c.cell_type == "code")

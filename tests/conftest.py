@@ -54,3 +54,25 @@ def run_main(argv) -> tuple[int, str]:
     with contextlib.redirect_stdout(out):
         code = main([str(a) for a in argv])
     return code, out.getvalue()
+
+
+@pytest.fixture
+def add_quantity(tmp_path, monkeypatch):
+    """Add a quantity module (its file name and text) to the quantities' catalog for one
+    test, as docs/architecture.md's worked example does: a folder on the catalog's path. The
+    declarations computed at import (the pareto: section's resolutions) are imported first,
+    over the catalog as shipped, so no other test sees the added quantity."""
+    import optdesign.fronts.section  # noqa: F401
+    import optdesign.quantities as quantities
+    from optdesign.quantities import catalog
+
+    def add(file_name: str, text: str) -> None:
+        folder = tmp_path / "more_quantities"
+        folder.mkdir(exist_ok=True)
+        (folder / file_name).write_text(text)
+        if str(folder) not in catalog.__path__:
+            monkeypatch.setattr(catalog, "__path__", [*catalog.__path__, str(folder)])
+        quantities._registry.cache_clear()
+
+    yield add
+    quantities._registry.cache_clear()

@@ -285,19 +285,10 @@ class Depth(TurnQuantity):
 
 
 @pytest.fixture
-def depth_quantity(tmp_path, monkeypatch):
+def depth_quantity(add_quantity):
     """The worked example of docs/architecture.md: one module in the quantities' catalog
     (here a folder added to the catalog's path) and nothing else."""
-    import optdesign.quantities as quantities
-    from optdesign.quantities import catalog
-
-    folder = tmp_path / "more_quantities"
-    folder.mkdir()
-    (folder / "depth.py").write_text(DEPTH_MODULE)
-    monkeypatch.setattr(catalog, "__path__", [*catalog.__path__, str(folder)])
-    quantities._registry.cache_clear()
-    yield
-    quantities._registry.cache_clear()
+    add_quantity("depth.py", DEPTH_MODULE)
 
 
 def test_a_new_quantity_is_one_module(depth_quantity, tmp_path):

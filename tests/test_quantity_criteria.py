@@ -42,8 +42,6 @@ def _data(**changes):
      r"constraints\.transmission_angle\.lower and constraints\.min_transmission_angle_deg "
      r"name the same bound: give one"),
     ({"objective__minimize": "swing"}, r"objective\.minimize must be one of"),
-    ({"regulation": {"eccentricity": {"lower": 0.5, "upper": 1.0}}},
-     r"constraints\.housing_radius is held at listed eccentricities"),
 ])
 def test_bad_bounds_are_named(change, message):
     with pytest.raises(ProblemError, match=message):

@@ -12,8 +12,8 @@ from optdesign.evaluation.figures import evaluate
 from optdesign.evaluation.regulation import curve_over_range, worst_over_range
 from optdesign.outputs.tabular import Tabular
 from optdesign.outputs.units import design_units, gear_ratio_text, stamped
-from optdesign.quantities import design_quantities
-from optdesign.quantities.criteria import Measured
+from optdesign.quantities import design_quantities, get_quantity
+from optdesign.quantities.criteria import Measured, searched_quantities
 from optdesign.solver.verify import checks
 
 
@@ -105,7 +105,8 @@ def analyze(problem, values: dict | None = None) -> AnalysisResult:
     if ev.failure is None and problem.eccentricity_range is not None:
         # the whole interval, as the solve's verification sees it
         worst = worst_over_range(design, problem.stroke, problem.input_speed,
-                                 problem.objective.ripple, *problem.eccentricity_range)
+                                 problem.objective.ripple, *problem.eccentricity_range,
+                                 quantities=searched_quantities(design))
         if worst.failure is not None:
             ev.failure, ev.failed_eccentricity = worst.failure, worst.failed_eccentricity
         else:
@@ -186,13 +187,17 @@ def format_analysis(result: AnalysisResult, name: str = "") -> str:
                      f"transmission angle {r['min_transmission_angle_deg']:.2f} deg at e = "
                      f"{r['angle_eccentricity']:.4f}")
     if result.quantities:
-        from optdesign.quantities import get_quantity
         lines.append("")
-        lines.append("quantities (worst over the listed eccentricities; the ratio at e = 1):")
+        over = "the listed eccentricities" + (
+            " and the regulation interval" if "interval" in result.quantities else "")
+        lines.append(f"quantities (worst over {over}; the ratio at e = 1):")
+        interval = result.quantities.get("interval", {})
         for name, value in result.quantities["values"].items():
             q = get_quantity(name)
             unit = "" if q.unit == "-" else f" {q.unit}"
-            lines.append(f"  {name:<20} {value:12.6g}{unit}")
+            where = f"  (interval's worst at e = {interval[name]['eccentricity']:.4f})" \
+                if name in interval else ""
+            lines.append(f"  {name:<20} {value:12.6g}{unit}{where}")
     if result.constraints:
         lines.append("")
         lines.append("constraints of the problem file:")

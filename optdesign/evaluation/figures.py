@@ -18,6 +18,7 @@ from optdesign.envelope.sampled import StrokeFigures, driving_speeds
 from optdesign.errors import AssemblyError, ProblemError
 from optdesign.evaluation.design import Design
 from optdesign.evaluation.regulation import RangeWorst, worst_over_range
+from optdesign.quantities.criteria import interval_quantities
 
 
 @dataclass
@@ -176,8 +177,8 @@ def evaluate_problem(problem, values=None, strokes: tuple[str, ...] | None = Non
                      extra: tuple[float, ...] = (), search: bool = True) -> Evaluation:
     """:func:`evaluate` of the problem's design (or ``values``) at its eccentricities, then at
     ``extra`` ones (the solve's held interior eccentricities, in order); with a regulation
-    interval (and ``search``), its worst δ and transmission angle are searched too
-    (``Evaluation.worst``)."""
+    interval (and ``search``), its worst δ and transmission angle are searched too, and the
+    worst of each quantity a criterion reads over the interval (``Evaluation.worst``)."""
     design = Design.from_problem(problem, values)
     ev = evaluate(design, problem.stroke, problem.input_speed,
                   eccentricities_of(problem) + tuple(extra), strokes)
@@ -199,13 +200,15 @@ _WORST_CACHE_SIZE = 32
 def _worst_of(problem, design: Design) -> RangeWorst:
     """:func:`~optdesign.evaluation.regulation.worst_over_range` of ``design`` over the problem's
     interval, remembered for the last few designs."""
+    names = interval_quantities(problem)
     key = (problem.mechanism, problem.stroke, problem.input_speed, problem.objective.ripple,
            problem.eccentricity_range, tuple(sorted(problem.options.items())),
-           tuple(sorted((k, float(v)) for k, v in design.values.items())))
+           tuple(sorted((k, float(v)) for k, v in design.values.items())), names)
     worst = _WORST_CACHE.get(key)
     if worst is None:
         worst = worst_over_range(design, problem.stroke, problem.input_speed,
-                                 problem.objective.ripple, *problem.eccentricity_range)
+                                 problem.objective.ripple, *problem.eccentricity_range,
+                                 quantities=names)
         if len(_WORST_CACHE) >= _WORST_CACHE_SIZE:
             _WORST_CACHE.pop(next(iter(_WORST_CACHE)))
         _WORST_CACHE[key] = worst

@@ -6,6 +6,9 @@ listed points only. δ(e) is smooth between the eccentricities where the envelop
 order changes and has kinks there, so the worst e is found on the exact evaluator by a coarse
 scan of e and a bounded scalar search (Brent's) on the cells around every local maximum of the
 scan (every local minimum, for the transmission angle); the ends are exact points of the scan.
+Any other quantity a criterion reads over the interval (a housing radius bound, a least peak
+acceleration) is searched the same way on its own exact form
+(:meth:`optdesign.quantities.base.Quantity.exact`), towards the side where it grows worse.
 docs/formulation.md, "The whole regulation range".
 """
 from __future__ import annotations
@@ -16,6 +19,7 @@ import numpy as np
 
 from optdesign.envelope.exact import exact_figures, search_grid
 from optdesign.errors import AssemblyError, ProblemError
+from optdesign.quantities import get_quantity
 
 #: eccentricities of the coarse scan over the interval (ends included)
 SCAN_POINTS = 17
@@ -42,6 +46,8 @@ class RangeWorst:
     evaluations: int = 0
     #: every eccentricity evaluated, with its δ and least angle (the scan and the searches)
     points: dict[float, tuple[float, float]] = field(default_factory=dict)
+    #: every other quantity searched: its worst over the interval, (eccentricity, value)
+    quantities: dict[str, tuple[float, float]] = field(default_factory=dict)
 
     def interior(self, e: float | None, share: float = 1e-6) -> bool:
         """``e`` lies strictly inside the interval (farther than ``share`` of it from an end)."""
@@ -49,8 +55,27 @@ class RangeWorst:
         return e is not None and self.lower + share * width < e < self.upper - share * width
 
 
+@dataclass
+class _Point:
+    """One eccentricity of the search, sampled once: what a quantity's exact form reads
+    (``figures`` per stroke, ``sampled`` on the search grid, the least transmission angle)."""
+
+    eccentricity: float
+    phi: np.ndarray
+    sampled: dict
+    figures: dict
+    design: object = field(repr=False)
+
+    @property
+    def min_angle_deg(self) -> float:
+        return float(self.design.transmission_angles(self.eccentricity, phi=self.phi,
+                                                     cos_mu=self.sampled["cos_mu"]).min())
+
+
 class _AtEccentricity:
-    """δ and the least transmission angle of one design at any e, each e evaluated once."""
+    """δ, the least transmission angle and any quantity of one design at any e, each e
+    sampled and evaluated once. It reads as an evaluation to a quantity's exact form
+    (``design``, ``stroke``, ``input_speed``, :meth:`at`)."""
 
     def __init__(self, design, stroke: str, input_speed: float, definition: str):
         self.design, self.stroke, self.input_speed = design, stroke, input_speed
@@ -58,6 +83,29 @@ class _AtEccentricity:
         self.points: dict[float, tuple[float, float]] = {}
         self.failed: float | None = None
         self.refined: dict[float, bool] = {}
+        self._sampled: dict[float, _Point] = {}
+        #: quantity name -> {e: exact value}
+        self.values: dict[str, dict[float, float]] = {}
+
+    def at(self, e: float) -> _Point:
+        """The design sampled and its exact figures at e (AssemblyError where it does not
+        assemble)."""
+        e = float(e)
+        known = self._sampled.get(e)
+        if known is None:
+            design = self.design
+            phi = search_grid(design, e)
+            sampled = design.sample(phi, e)
+            try:
+                design.check_assembly(e, phi=phi, cos_mu=sampled["cos_mu"])
+            except AssemblyError:
+                self.failed = e
+                raise
+            figures, _ = exact_figures(design, self.stroke, self.input_speed, e, phi=phi,
+                                       sampled=sampled)
+            known = _Point(e, phi, sampled, {self.stroke: figures}, design)
+            self._sampled[e] = known
+        return known
 
     def __call__(self, e: float, angle: str = "refined") -> tuple[float, float]:
         """(δ, least angle in degrees) at e. ``angle``: ``refined`` (between the samples),
@@ -68,34 +116,34 @@ class _AtEccentricity:
         if known is not None and (angle == "none" or self.refined.get(e)
                                   or (angle == "sampled" and np.isfinite(known[1]))):
             return known
-        design = self.design
-        phi = search_grid(design, e)
-        sampled = design.sample(phi, e)
-        try:
-            design.check_assembly(e, phi=phi, cos_mu=sampled["cos_mu"])
-        except AssemblyError:
-            self.failed = e
-            raise
-        figures, _ = exact_figures(design, self.stroke, self.input_speed, e, phi=phi,
-                                   sampled=sampled)
-        cos_mu = sampled["cos_mu"]
+        point = self.at(e)
+        cos_mu = point.sampled["cos_mu"]
         if angle == "refined":
-            mu = float(design.transmission_angles(e, phi=phi, cos_mu=cos_mu).min())
+            mu = point.min_angle_deg
         elif angle == "sampled":
             mu = float(np.degrees(np.arccos(min(np.abs(cos_mu).max(), 1.0))))
         else:
             mu = float("nan")
         self.refined[e] = angle == "refined"
-        self.points[e] = (figures.ripple(self.definition), mu)
+        self.points[e] = (point.figures[self.stroke].ripple(self.definition), mu)
         return self.points[e]
+
+    def quantity(self, name: str, e: float) -> float:
+        """The exact value of quantity ``name`` at e."""
+        e = float(e)
+        values = self.values.setdefault(name, {})
+        if e not in values:
+            values[e] = float(get_quantity(name).exact(self, e, self.definition))
+        return values[e]
 
 
 def worst_over_range(design, stroke: str, input_speed: float, definition: str,
-                     lower: float, upper: float, scan: int = SCAN_POINTS) -> RangeWorst:
+                     lower: float, upper: float, scan: int = SCAN_POINTS,
+                     quantities=()) -> RangeWorst:
     """The largest δ (``definition``: midrange or mean) and the least transmission angle of
     ``design`` over e in [lower, upper]: a scan of ``scan`` eccentricities, then a bounded
     Brent search on the two cells around every local maximum of δ (minimum of the angle) of
-    the scan."""
+    the scan; and the worst of each of ``quantities`` (names) by the same search."""
     at = _AtEccentricity(design, stroke, input_speed, definition)
     out = RangeWorst(lower, upper)
     es = np.linspace(lower, upper, scan) if upper > lower else np.array([lower])
@@ -107,6 +155,8 @@ def worst_over_range(design, stroke: str, input_speed: float, definition: str,
         for j in _local_extremes(-angle):
             at(es[j])                                     # the scan's value, refined
             _refine(lambda e: at(e)[1], es, j)
+        for name in quantities:
+            out.quantities[name] = _worst_quantity(at, name, es)
     except (AssemblyError, ProblemError) as exc:
         out.failure = exc
         out.failed_eccentricity = at.failed
@@ -124,6 +174,29 @@ def worst_over_range(design, stroke: str, input_speed: float, definition: str,
     out.angle_eccentricity, out.min_angle_deg = float(e_all[k]), float(a_all[k])
     out.evaluations = len(at.points)
     return out
+
+
+def quantities_over_range(design, stroke: str, input_speed: float, definition: str,
+                          lower: float, upper: float, names,
+                          scan: int = SCAN_POINTS) -> dict[str, tuple[float, float]]:
+    """The worst (e, value) over e in [lower, upper] of each quantity of ``names``, by the
+    scan and bounded search of :func:`worst_over_range` (AssemblyError where the design does
+    not assemble at an e of the search)."""
+    at = _AtEccentricity(design, stroke, input_speed, definition)
+    es = np.linspace(lower, upper, scan) if upper > lower else np.array([lower])
+    return {name: _worst_quantity(at, name, es) for name in names}
+
+
+def _worst_quantity(at: _AtEccentricity, name: str, es: np.ndarray) -> tuple[float, float]:
+    """(e, value) of the worst of quantity ``name`` over the scan ``es`` and a bounded search
+    around every local worst of the scan."""
+    sign = 1.0 if get_quantity(name).worst == "max" else -1.0
+    values = np.array([at.quantity(name, e) for e in es])
+    for j in _local_extremes(sign * values):
+        _refine(lambda e: -sign * at.quantity(name, e), es, j)
+    found = at.values[name]
+    e = max(found, key=lambda x: sign * found[x])
+    return float(e), found[e]
 
 
 def _local_extremes(values: np.ndarray) -> list[int]:

@@ -211,8 +211,9 @@ CONSTRAINT_KEYS: tuple[Key, ...] = (
 REGULATION_KEYS: tuple[Key, ...] = (
     Key("eccentricity", "either", "the fractions e of the regulated length (l1, L, r1) at "
         "which δ is held: a list (δ computed at each listed e; the solve holds the worst), or "
-        "an interval {lower, upper} (δ, the ripple cap and the transmission angle held at "
-        "every e in it; docs/formulation.md, \"The whole regulation range\")", unit="-",
+        "an interval {lower, upper} (δ, the ripple cap, the transmission angle and every "
+        "bound on a quantity held at every e in it; docs/formulation.md, \"The whole "
+        "regulation range\")", unit="-",
         default=[1.0], alternatives=(
             Key("eccentricity", "list", "the listed fractions", unit="-",
                 item=Key("eccentricity", "number", "a fraction of the regulated length",
@@ -401,7 +402,6 @@ class Problem:
         r = Reader(self.source)
         ecc, interval = _read_regulation(r, {"eccentricity": eccentricity})
         problem = replace(self, eccentricities=ecc, eccentricity_range=interval)
-        _check_quantity_criteria(r, problem.constraints, problem.objective, interval)
         if self.objective.robust == "worst_case":
             _check_robust(r, self.objective, interval, self.sections)
         return _checked_variant(r, problem)
@@ -492,7 +492,6 @@ def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "pro
             sections[key] = getattr(import_module(module), func)(top[key], r.sub(key))
     if objective.robust == "worst_case":
         _check_robust(r, objective, ecc_range, sections)
-    _check_quantity_criteria(r, constraints, objective, ecc_range)
     for key in constraints.extra:
         owner = EXTRA_CONSTRAINT_SECTIONS.get(key)
         if owner is not None and owner not in sections:
@@ -735,24 +734,6 @@ def _quantity_aliases(r, top, constraints: Constraints, objective: Objective):
             kept.append(rest)
     constraints = replace(constraints, quantities=tuple(kept), **moved["constraints"])
     return constraints, replace(objective, **moved["objective"])
-
-
-def _check_quantity_criteria(r, constraints: Constraints, objective: Objective,
-                             ecc_range) -> None:
-    """Bounds on quantities and a quantity objective are held at the listed eccentricities
-    of a nominal solve: not yet over a regulation interval nor in a robust solve."""
-    named = [f"constraints.{spec.name}" for spec in constraints.quantities]
-    if objective.minimize.lstrip("-") in known_quantities() and \
-            objective.minimize not in ("ripple", "-ratio"):
-        named.append("objective.minimize")
-    if not named:
-        return
-    if ecc_range is not None:
-        raise r.error(named[0], "is held at listed eccentricities; with a regulation "
-                                "interval only the ripple, the ratio and the transmission "
-                                "angle are (list the eccentricities instead)")
-    if objective.robust == "worst_case":
-        raise r.error(named[0], "is not yet held over a tolerance box (robust: worst_case)")
 
 
 def _read_objective(r, raw) -> Objective:

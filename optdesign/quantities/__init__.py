@@ -48,12 +48,15 @@ def get_quantity(name: str) -> Quantity:
 def quantities_of(evaluation, eccentricities, ripple: str = "midrange",
                   names=None) -> dict:
     """Every quantity's exact value (or those ``names``) of an evaluated design:
-    ``{"values": {name: value}, "per_eccentricity": [{"eccentricity": e, name: value}]}``.
+    ``{"values": {name: value}, "per_eccentricity": [{"eccentricity": e, name: value}]}``,
+    and with a searched regulation interval ``"interval": {name: {"eccentricity", "value"}}``,
+    each searched quantity's worst over the interval and where it lies.
 
     ``values`` holds what a criterion reads: the value at the quantity's own eccentricity
     (:attr:`~optdesign.quantities.base.Quantity.at`: the ratio's is e = 1) or else the worst
-    over ``eccentricities`` (and, for the ripple and the transmission angle, over the
-    regulation interval when the evaluation searched it)."""
+    over ``eccentricities`` and, for those the evaluation searched over the regulation
+    interval (the ripple, the transmission angle and the quantities its criteria name), the
+    worst over the whole interval."""
     names = tuple(n for n in (names or known())
                   if get_quantity(n).defined_for(evaluation.design))
     rows = []
@@ -67,14 +70,27 @@ def quantities_of(evaluation, eccentricities, ripple: str = "midrange",
         q = get_quantity(name)
         values[name] = float(q.exact(evaluation, q.at, ripple)) if q.at is not None else \
             q.worst_of([r[name] for r in rows])
+    out = {"values": values, "per_eccentricity": rows}
+    searched = _interval_worst(evaluation, ripple)
+    searched = {k: v for k, v in searched.items() if k in values}
+    for name, (e, value) in searched.items():
+        values[name] = get_quantity(name).worst_of([values[name], value])
+    if searched:
+        out["interval"] = {name: {"eccentricity": e, "value": value}
+                           for name, (e, value) in searched.items()}
+    return out
+
+
+def _interval_worst(evaluation, ripple: str) -> dict[str, tuple[float, float]]:
+    """(e, worst value) over the regulation interval of every quantity the evaluation
+    searched there (:class:`~optdesign.evaluation.regulation.RangeWorst`)."""
     interval = evaluation.worst
-    if interval is not None:
-        if "ripple" in values and evaluation.worst_definition == ripple:
-            values["ripple"] = max(values["ripple"], interval.delta)
-        if "transmission_angle" in values:
-            values["transmission_angle"] = min(values["transmission_angle"],
-                                               interval.min_angle_deg)
-    return {"values": values, "per_eccentricity": rows}
+    if interval is None:
+        return {}
+    out = {"transmission_angle": (interval.angle_eccentricity, interval.min_angle_deg)}
+    if evaluation.worst_definition == ripple:
+        out["ripple"] = (interval.eccentricity, interval.delta)
+    return out | dict(interval.quantities)
 
 
 def design_quantities(problem, evaluation) -> dict:

@@ -67,6 +67,29 @@ def quantity_specs(problem) -> list[QuantityBound]:
     return list({s.key: s for s in specs}.values())
 
 
+#: the quantities the regulation interval's own search always covers
+SEARCHED_ALWAYS = frozenset({"ripple", "transmission_angle"})
+
+
+def interval_quantities(problem) -> tuple[str, ...]:
+    """The quantities whose worst over the regulation interval a criterion of ``problem``
+    reads (a bound or the objective ``at: worst``), besides those the interval's search
+    always covers and those read at an eccentricity of their own (the ratio at e = 1)."""
+    if problem.eccentricity_range is None:
+        return ()
+    return tuple(sorted({s.name for s in quantity_specs(problem)
+                         if s.at is None and get_quantity(s.name).at is None
+                         and s.name not in SEARCHED_ALWAYS}))
+
+
+def searched_quantities(design) -> tuple[str, ...]:
+    """Every quantity of ``design`` a report gives the worst over a regulation interval of:
+    all but those the interval's search always covers and those read at an eccentricity of
+    their own (the ratio)."""
+    return tuple(n for n in known() if n not in SEARCHED_ALWAYS and get_quantity(n).at is None
+                 and get_quantity(n).defined_for(design))
+
+
 def measured_quantities(problem, ev) -> dict[str, float]:
     """The exact value of every :func:`quantity_specs` of ``problem`` on the evaluation."""
     out = {}

@@ -19,11 +19,14 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 
 from optdesign.envelope.sampled import STROKE_SIGNS
+from optdesign.errors import AssemblyError, ProblemError
+from optdesign.evaluation.regulation import quantities_over_range
 from optdesign.evaluation.sensitivity import sensitivity_record
 from optdesign.lifetime import die_with_parent
-from optdesign.quantities import design_quantities
-from optdesign.quantities.criteria import (LengthConstraint, constraints_of, objective_of,
-                                           quantity_specs)
+from optdesign.quantities import design_quantities, get_quantity
+from optdesign.quantities.criteria import (LengthConstraint, TOL_QUANTITY_REL, constraints_of,
+                                           interval_quantities, objective_of, quantity_specs,
+                                           searched_quantities)
 from optdesign.solver.accuracy import solve_accuracy
 from optdesign.solver.nlp import Held, PhaseNLP, SECONDARY_BUDGET, is_robust
 from optdesign.solver.result import PhaseResult, SolveResult, StartRecord
@@ -520,9 +523,10 @@ def next_held(problem, ver: Verification) -> Held:
     """The eccentricity slots for the next solve of a design verified with ``ver.held``: the
     same, unless the worst δ inside the regulation interval exceeds the worst at the held
     eccentricities (the listed ones and the active slots) by more than REGULATION_TOL, or the
-    least transmission angle inside it breaks the bound where no held eccentricity sees it;
-    then that eccentricity is held: in the slot of a held one close to it, else in an idle
-    slot, else in place of the held slot of least δ."""
+    least transmission angle inside it breaks the bound where no held eccentricity sees it,
+    or a quantity a criterion reads over the interval is worse inside it than at every held
+    eccentricity (:func:`_quantities_wanted`); then that eccentricity is held: in the slot of
+    a held one close to it, else in an idle slot, else in place of the held slot of least δ."""
     held, ev = ver.held, ver.evaluation
     if not held.eccentricities or ev is None or ev.worst is None:
         return held
@@ -542,6 +546,7 @@ def next_held(problem, ver: Verification) -> Held:
             worst.min_angle_deg < bound - TOL_ANGLE_DEG and \
             worst.min_angle_deg < min(r[2] for r in rows) - TOL_ANGLE_DEG:
         wanted.append((worst.angle_eccentricity, worst.points[worst.angle_eccentricity][0]))
+    wanted += _quantities_wanted(problem, ev, [r[0] for r in rows])
     if not wanted:
         return held
     es, active = list(held.eccentricities), list(held.active)
@@ -559,6 +564,29 @@ def next_held(problem, ver: Verification) -> Held:
         es[j], active[j], deltas[j] = e, True, delta
         placed.add(j)
     return Held(tuple(es), tuple(active))
+
+
+def _quantities_wanted(problem, ev, held_es) -> list[tuple[float, float]]:
+    """(e, δ there) of each quantity a criterion reads over the regulation interval whose
+    interval worst lies inside it and is worse than at every held eccentricity ``held_es``
+    by more than the bound's tolerance, where it matters: the objective's quantity always, a
+    bounded one when the interval's worst breaks the bound."""
+    worst, out = ev.worst, []
+    objective = objective_of(problem)
+    bounds = {s.name: s for s in problem.constraints.quantities if s.at is None}
+    for name in interval_quantities(problem):
+        e, value = worst.quantities[name]
+        q = get_quantity(name)
+        sign = 1.0 if q.worst == "max" else -1.0
+        seen = max(sign * q.exact(ev, x, problem.objective.ripple) for x in held_es)
+        tol = TOL_QUANTITY_REL * max(1.0, abs(value))
+        if not worst.interior(e) or sign * value <= seen + tol:
+            continue
+        spec = bounds.get(name)
+        breaks = spec is not None and (value > spec.upper + tol or value < spec.lower - tol)
+        if breaks or getattr(objective, "quantity", None) == name:
+            out.append((e, worst.points.get(e, (np.inf,))[0]))
+    return out
 
 
 def _same_cycles(a, b) -> bool:
@@ -647,14 +675,32 @@ def _fill(result: PhaseResult, problem, outcome: Outcome) -> PhaseResult:
     result.regulation = ver.regulation()
     result.worst_eccentricity = ver.worst_eccentricity
     if ver.worst_cases:
-        ripple, angle = ver.worst_cases
+        ripple, angle, *bounded = ver.worst_cases
         result.worst_case_delta = ripple.value
         result.worst_case_min_transmission_angle_deg = angle.value
+        result.worst_case_quantities = {case.quantity: case.value for case in bounded}
     result.active = outcome.record.active
     result.sensitivities = sensitivity_record(problem, design, ver.evaluation)
-    result.quantities = design_quantities(problem, ver.evaluation)
+    result.quantities = design_quantities(problem, _every_quantity_searched(problem,
+                                                                            ver.evaluation))
     result.message = ""
     return result
+
+
+def _every_quantity_searched(problem, ev):
+    """``ev`` with the worst over the regulation interval of every quantity the report gives
+    (the verification searched only those the criteria read); ``ev`` itself without an
+    interval, or when a further search point does not assemble."""
+    if ev.worst is None:
+        return ev
+    missing = [n for n in searched_quantities(ev.design) if n not in ev.worst.quantities]
+    try:
+        found = quantities_over_range(ev.design, problem.stroke, problem.input_speed,
+                                      problem.objective.ripple, *problem.eccentricity_range,
+                                      names=missing)
+    except (AssemblyError, ProblemError):
+        return ev
+    return replace(ev, worst=replace(ev.worst, quantities=ev.worst.quantities | found))
 
 
 def solve(problem, progress=None) -> SolveResult:

@@ -24,10 +24,12 @@ starts at the curve count, one hand-over into each). Every constraint's bounds c
 (:mod:`optdesign.quantities.criteria`) at each solve.
 
 A regulation interval (``regulation: {eccentricity: {lower, upper}}``) adds
-:data:`ECCENTRICITY_SLOTS` eccentricity blocks whose e is a parameter (the regulated length × e
+:func:`eccentricity_slots` eccentricity blocks whose e is a parameter (the regulated length × e
 enters the kinematics): the driver holds the worst interior eccentricities of the exact check
 there, like a hand-over, and moves them without rebuilding; an idle slot duplicates an end,
-its variables fixed and its rows free (:class:`Held`).
+its variables fixed and its rows free (:class:`Held`). A quantity bounded (or minimised) over
+the interval is tracked in every slot as at a listed eccentricity, and its epigraph covers the
+held slots.
 
 Construction (chosen by ``benchmarks/solve_scaling.py``): the mechanism's per-angle SX
 function and a per-sample SX function (cos²μ and the smooth maximum) are ``map``-ped over the
@@ -45,7 +47,8 @@ import numpy as np
 from optdesign.envelope.sampled import STROKE_SIGNS, ripple_of
 from optdesign.evaluation.figures import eccentricities_of
 from optdesign.quantities import TurnQuantity, get_quantity
-from optdesign.quantities.criteria import constraints_of, objective_of, quantity_specs
+from optdesign.quantities.criteria import (constraints_of, interval_quantities, objective_of,
+                                           quantity_specs)
 
 IPOPT_OPTIONS = {
     "ipopt.print_level": 0,
@@ -111,6 +114,16 @@ class Quantities:
 #: eccentricities, held like listed ones; each slot's e is a parameter, so moving it never
 #: rebuilds the NLP (docs/formulation.md, "The whole regulation range")
 ECCENTRICITY_SLOTS = 2
+
+
+def eccentricity_slots(problem) -> int:
+    """The eccentricity slots of ``problem``'s NLP: none without a regulation interval, else
+    :data:`ECCENTRICITY_SLOTS` (the worst δ and the least transmission angle) and one more
+    per quantity a criterion reads over the interval (its own worst eccentricity)."""
+    if problem.eccentricity_range is None:
+        return 0
+    return ECCENTRICITY_SLOTS + len(interval_quantities(problem))
+
 #: parameterised scenario slots of a robust solve (``objective.robust: worst_case``): parts of
 #: the tolerance box, each the design's lengths plus an offset vector that is a parameter
 SCENARIO_SLOTS = 4
@@ -135,7 +148,8 @@ class Held:
         out = cls()
         if problem.eccentricity_range is not None:
             upper = problem.eccentricity_range[1]
-            out = cls((upper,) * ECCENTRICITY_SLOTS, (False,) * ECCENTRICITY_SLOTS)
+            slots = eccentricity_slots(problem)
+            out = cls((upper,) * slots, (False,) * slots)
         if is_robust(problem):
             zero = (0.0,) * len(problem.model.lengths)
             out = replace(out, offsets=(zero,) * SCENARIO_SLOTS,
@@ -308,9 +322,10 @@ class PhaseNLP:
         self.slots = slots or self.n_curves
         self.eccs = eccentricities_of(problem)
         self.listed = [i for i, e in enumerate(self.eccs) if e in problem.eccentricities]
-        self.n_slots = ECCENTRICITY_SLOTS if problem.eccentricity_range is not None else 0
+        self.n_slots = eccentricity_slots(problem)
         #: the eccentricity blocks in order: e = 1 and the listed ones, then the slots
-        self.tags = [tag_of(e) for e in self.eccs] + [slot_tag(j) for j in range(self.n_slots)]
+        self.slot_tags = [slot_tag(j) for j in range(self.n_slots)]
+        self.tags = [tag_of(e) for e in self.eccs] + self.slot_tags
         self.n_scenarios = SCENARIO_SLOTS if is_robust(problem) else 0
         #: per scenario, its eccentricity blocks (after the nominal's and the slots')
         self.scenario_tags = [[f"{tag_of(e)}_{scenario_tag(j)}" for e in self.eccs]
@@ -408,7 +423,7 @@ class PhaseNLP:
             b.row("ripple_epigraph_slots", ca.vertcat(*[t - r for r in ripples[len(self.eccs):]]))
         q = Quantities(lengths=lengths, ratio=means[0], worst_ripple=t,
                        peak_speed=peaks[0] * P.input_speed, cos_mu_sq=cos_sq,
-                       quantities=self._quantities(b, t, ripples, means))
+                       quantities=self._quantities(b, t, ripples, means, self.tags))
         self._criterion_blocks = []
         for criterion in self.criteria:
             for name, expr in criterion.rows(q):
@@ -423,8 +438,12 @@ class PhaseNLP:
             blocks(part, self.scenario_tags[j], self.eccs, sq)
             b.row(f"ripple_epigraph[{scenario_tag(j)}]",
                   ca.vertcat(*[t - ripples[first + i] for i in self.listed]))
+            own = slice(first, first + len(self.eccs))
             qj = Quantities(lengths=part, ratio=means[first], worst_ripple=t,
-                            peak_speed=peaks[first] * P.input_speed, cos_mu_sq=sq)
+                            peak_speed=peaks[first] * P.input_speed, cos_mu_sq=sq,
+                            quantities=self._quantities(b, t, ripples[own], means[own],
+                                                        self.scenario_tags[j],
+                                                        scenario_tag(j)))
             for criterion in self.criteria:
                 for name, expr in criterion.rows(qj):
                     if not name.endswith(f"_{scenario_tag(j)}]"):
@@ -441,32 +460,43 @@ class PhaseNLP:
                                      [ca.vertcat(*ripples), ca.vertcat(*means),
                                       ca.vertcat(*peaks)])
 
-    def _quantities(self, b: "_Builder", t, ripples, means) -> dict:
-        """Each quantity spec's value: the envelope's own expression for the ratio and the
-        ripple, else an epigraph variable z over the spec's eccentricity blocks with rows
-        z - c >= 0 for every figure c of a quantity whose larger values are worse (c - z
-        >= 0 for the others): a bound on z, or z as the objective, holds every figure."""
+    def _quantities(self, b: "_Builder", t, ripples, means, tags, scenario: str = "") -> dict:
+        """Each quantity spec's value for one part (the nominal, or ``scenario``'s part):
+        the envelope's own expression for the ratio and the ripple, else an epigraph
+        variable z over the spec's eccentricity blocks with rows z - c >= 0 for every figure
+        c of a quantity whose larger values are worse (c - z >= 0 for the others): a bound on
+        z, or z as the objective, holds every figure. ``tags``, ``ripples`` and ``means``:
+        the part's blocks in :attr:`eccs` order. The nominal's spec at its worst covers the
+        regulation interval's slots too, a row block per slot (free while the slot is idle);
+        a scenario's variables and rows carry its name (fixed and free while it is idle)."""
         out = {}
+        listed = [tags[i] for i in self.listed]
         for spec in self.specs:
-            tags = [tag_of(spec.at)] if spec.at is not None else \
-                [self.tags[i] for i in self.listed]
+            at = [tags[self.eccs.index(spec.at)]] if spec.at is not None else listed
             if spec.name == "ratio":
                 out[spec.key] = means[0]
             elif spec.name == "ripple":
-                out[spec.key] = t if spec.at is None else ripples[self.tags.index(tags[0])]
+                out[spec.key] = t if spec.at is None else ripples[tags.index(at[0])]
             else:
-                z = b.variable(f"quantity_{spec.key}", 1)
-                figures = ca.vertcat(*[self._quantity_rows[(spec.name, tag)] for tag in tags])
+                z = b.variable(f"quantity_{spec.key}" + (f"_{scenario}" if scenario else ""), 1)
                 sign = 1 if get_quantity(spec.name).worst == "max" else -1
-                b.row(f"quantity_epigraph_{spec.key}", sign * (z - figures))
+                figures = ca.vertcat(*[self._quantity_rows[(spec.name, tag)] for tag in at])
+                b.row(f"quantity_epigraph_{spec.key}" + (f"[{scenario}]" if scenario else ""),
+                      sign * (z - figures))
+                for tag in self.slot_tags if spec.at is None and not scenario else ():
+                    b.row(f"quantity_epigraph_{spec.key}[{tag}]",
+                          sign * (z - self._quantity_rows[(spec.name, tag)]))
                 out[spec.key] = z
         return out
 
     def _tracked_quantities(self, b: "_Builder", tag: str, e, pvec, w_hi) -> None:
         """The block's figures of every quantity a spec names: a turn quantity's components
         at exact stationary points (a free angle per component with g_i'(φ_i) = 0, windowed
-        like the peaks), the peak speed from the block's w_hi."""
-        if tag not in [self.tags[i] for i in self.listed]:
+        like the peaks), the peak speed from the block's w_hi; in the listed eccentricities'
+        blocks, the regulation interval's slots and the scenarios' listed blocks."""
+        held = [self.tags[i] for i in self.listed] + self.slot_tags + \
+            [tags[i] for tags in self.scenario_tags for i in self.listed]
+        if tag not in held:
             return
         options = tuple(sorted(self.problem.options.items()))
         for name in self.turn:

@@ -26,16 +26,21 @@ def summary_text(result, problem) -> str:
                      f"gear ratio i = 1/ratio = {gear_ratio_text(result.ratio)}); least "
                      f"transmission angle = {result.min_transmission_angle_deg:.2f} deg")
         values = (result.quantities or {}).get("values", {})
+        over = "the listed eccentricities" if problem.eccentricity_range is None else \
+            "the listed eccentricities and the interval"
         named = [spec for spec in quantity_specs(problem) if spec.key in values]
         if named:
             lines.append("quantities: " + "; ".join(
-                f"{spec.key} = {values[spec.key]:.6g}"
-                f"{'' if get_quantity(spec.name).unit == '-' else ' ' + get_quantity(spec.name).unit}"
-                for spec in named) + " (worst over the listed eccentricities)")
+                f"{spec.key} = {values[spec.key]:.6g}{_unit_text(spec.name)}"
+                for spec in named) + f" (worst over {over})")
         if result.worst_case_delta is not None:
+            best = result.best_phase()
+            bounded = "".join(
+                f"; the box's worst {key} = {value:.6g}{_unit_text(key.split('@')[0])}"
+                for key, value in (best.worst_case_quantities if best else {}).items())
             lines.append(f"robust: the worst part of the tolerance box has δ = "
-                         f"{result.worst_case_delta:.6f} (the objective); every part "
-                         f"assembles and keeps every constraint")
+                         f"{result.worst_case_delta:.6f} (the objective){bounded}; every "
+                         f"part assembles and keeps every constraint")
         lines.append(binding_text(result.active, problem))
         lines.append(sensitivity_line(result.sensitivities))
         lines += bound_warnings(result, problem)
@@ -90,3 +95,9 @@ def bound_warnings(result, problem) -> list[str]:
                    f"optimum would go past it (d{objective_of(problem).symbol}/d bound = "
                    f"{a['sensitivity']:+.3g} per mm); check that the bound is a real limit")
     return out
+
+
+def _unit_text(name: str) -> str:
+    """" mm" after a value of quantity ``name`` (nothing for a unitless one)."""
+    unit = get_quantity(name).unit
+    return "" if unit == "-" else f" {unit}"

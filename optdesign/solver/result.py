@@ -60,6 +60,8 @@ class PhaseResult:
     #: a robust solve: the tolerance box's worst δ and least transmission angle of the optimum
     worst_case_delta: float | None = None
     worst_case_min_transmission_angle_deg: float | None = None
+    #: ... and the worst of each bound's quantity over the box, by the bound's key
+    worst_case_quantities: dict = field(default_factory=dict)
     #: every quantity's exact value of the optimum (:func:`optdesign.quantities.quantities_of`:
     #: ``values`` and ``per_eccentricity``); empty without an optimum
     quantities: dict = field(default_factory=dict)

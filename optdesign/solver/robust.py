@@ -1,11 +1,12 @@
 """The robust solve's parts (``objective.robust: worst_case``): which parts of the tolerance box
 the NLP holds as scenarios, and the verdict on a robust optimum.
 
-The tolerance analysis (:mod:`optdesign.tolerance.worst_case`) finds the box's worst part for δ
-and for the transmission angle (assembly included); those become scenario slots of the NLP
-(:class:`~optdesign.solver.nlp.Held`), whose rows hold every constraint at each held part. The
-verdict: the worst δ ranks the optimum; the worst angle's part must keep the bound, and the
-constraints on the lengths and the ratio floor are checked at every corner of the box.
+The tolerance analysis (:mod:`optdesign.tolerance.worst_case`) finds the box's worst part for δ,
+for the transmission angle (assembly included) and for every bound on a quantity; those become
+scenario slots of the NLP (:class:`~optdesign.solver.nlp.Held`), whose rows hold every
+constraint at each held part. The verdict: the worst δ ranks the optimum; the worst angle's
+part and each bound's worst part must keep their bounds, and the constraints on the lengths and
+the ratio floor are checked at every corner of the box.
 """
 from __future__ import annotations
 
@@ -15,8 +16,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from optdesign.quantities.criteria import (LengthConstraint, Measured, TOL_ANGLE_DEG, TOL_RATIO,
-                                           constraints_of)
+from optdesign.quantities.criteria import (LengthConstraint, Measured, TOL_ANGLE_DEG,
+                                           TOL_QUANTITY_REL, TOL_RATIO, constraints_of)
 from optdesign.solver.nlp import Held, SCENARIO_SLOTS
 from optdesign.solver.verify import Verification
 from optdesign.tolerance.exact_part import exact_part
@@ -30,12 +31,24 @@ MAX_CORNER_DIMS = 8
 
 
 def worst_cases(problem, values) -> tuple:
-    """The tolerance analysis of ``values``: the worst part for δ and for the transmission
-    angle (:func:`optdesign.tolerance.worst_case.worst_case`), and the box's corners that
-    break a constraint on the lengths or the ratio floor (:func:`corner_violations`)."""
+    """The tolerance analysis of ``values``: the worst part for δ, for the transmission
+    angle and for each bound on a quantity, by its key
+    (:func:`optdesign.tolerance.worst_case.worst_case`), and the box's corners that break a
+    constraint on the lengths or the ratio floor (:func:`corner_violations`)."""
     tolerances = problem.sections["tolerances"]
-    return tuple(worst_case(problem, values, tolerances, quantity=q)
-                 for q in ("ripple", "transmission_angle")), corner_violations(problem, values)
+    keys = ("ripple", "transmission_angle") + tuple(s.key for s in problem.constraints.quantities)
+    return tuple(worst_case(problem, values, tolerances, quantity=q) for q in keys), \
+        corner_violations(problem, values)
+
+
+def broken_bound(problem, case) -> float:
+    """How far the worst part ``case`` of a bound's quantity lies outside the bound (<= 0
+    when it keeps it, inf when the part does not assemble)."""
+    if not case.assembles:
+        return math.inf
+    spec = next(s for s in problem.constraints.quantities if s.key == case.quantity)
+    return max(spec.lower - case.value, case.value - spec.upper) - \
+        TOL_QUANTITY_REL * max(1.0, abs(case.value))
 
 
 def next_scenarios(problem, held: Held, worst_cases, bound: float | None = None,
@@ -47,12 +60,13 @@ def next_scenarios(problem, held: Held, worst_cases, bound: float | None = None,
     (:func:`corner_violations`) finds broken; the oldest held part makes room when every slot
     is in use (the part wanted least recently; one wanted again is kept)."""
     wanted = []
-    ripple, angle = worst_cases
+    ripple, angle, *bounded = worst_cases
     if not ripple.assembles or bound is None or ripple.value > bound + ROBUST_TOL:
         wanted.append(ripple)
     if not angle.assembles or \
             angle.value < problem.constraints.min_transmission_angle_deg - TOL_ANGLE_DEG:
         wanted.append(angle)
+    wanted += [case for case in bounded if broken_bound(problem, case) > 0]
     names = problem.model.lengths
     wanted = [tuple(float(case.deviation[k]) for k in names) for case in wanted]
     wanted += [offsets for _, offsets in (corners or {}).values()]
@@ -68,13 +82,14 @@ def next_scenarios(problem, held: Held, worst_cases, bound: float | None = None,
 
 def robust_verdict(problem, values, ver: Verification) -> None:
     """A robust optimum ranks by the tolerance box's worst δ, and is feasible only if every
-    part assembles and keeps the transmission angle (the tolerance analysis's word) and every
-    corner of the box keeps the constraints on the lengths and the ratio floor."""
+    part assembles and keeps the transmission angle and every bound on a quantity (the
+    tolerance analysis's word) and every corner of the box keeps the constraints on the
+    lengths and the ratio floor."""
     if not ver.worst_cases:
         ver.feasible, ver.key = False, math.inf
         ver.violations.setdefault("robust", math.inf)
         return
-    ripple, angle = ver.worst_cases
+    ripple, angle, *bounded = ver.worst_cases
     ver.key = ripple.value if ripple.assembles else math.inf
     deficit = problem.constraints.min_transmission_angle_deg - angle.value
     if not (ripple.assembles and angle.assembles):
@@ -83,6 +98,11 @@ def robust_verdict(problem, values, ver: Verification) -> None:
     elif deficit > TOL_ANGLE_DEG:
         ver.violations["robust_transmission_angle"] = deficit
         ver.feasible = False
+    for case in bounded:
+        amount = broken_bound(problem, case)
+        if amount > 0:
+            ver.violations[f"robust_{case.quantity}"] = amount
+            ver.feasible = False
     for name, (amount, _) in ver.corners.items():
         ver.violations[f"robust_{name}"] = amount
         ver.feasible = False

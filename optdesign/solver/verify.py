@@ -17,7 +17,7 @@ from optdesign.evaluation.figures import Evaluation, eccentricities_of, evaluate
 from optdesign.quantities import get_quantity
 from optdesign.quantities.criteria import (Measured, SectionConstraint, TOL_ANGLE_DEG,
                                            TOL_LENGTH_REL, TOL_RATIO, constraints_of, objective_of)
-from optdesign.solver.nlp import Held
+from optdesign.solver.nlp import Held, scenario_tag
 
 #: the tolerances and the eccentricity order are the criteria's and the evaluation's; they are
 #: importable from here too, where the exact check is
@@ -62,11 +62,17 @@ class Verification:
         """The evaluation of every eccentricity block of the NLP, in its order: e = 1 and the
         listed ones, the held slots, then each scenario part's (the nominal's where a part
         does not assemble: the NLP's assembly rows then bring it back)."""
-        per_e = list(self.evaluation.per_e)
-        n = len(per_e) - len(self.held.eccentricities)
+        return [x for _, x in self.designed_blocks()]
+
+    def designed_blocks(self) -> list[tuple]:
+        """(design, evaluation) of every block of :meth:`blocks`: a scenario part's blocks
+        are its own design's."""
+        ev = self.evaluation
+        out = [(ev.design, x) for x in ev.per_e]
+        n = len(out) - len(self.held.eccentricities)
         for part in self.scenarios:
-            per_e += (part.per_e if part is not None else per_e[:n])
-        return per_e
+            out += [(part.design, x) for x in part.per_e] if part is not None else out[:n]
+        return out
 
     @property
     def figures(self) -> list:
@@ -136,7 +142,7 @@ def start_guess(nlp, ver: Verification) -> dict:
     values = ev.design.values
     guess = {"lengths": [values[k] / s for k, s in zip(nlp.free, nlp.scale)],
              "worst_ripple": [ver.delta]}
-    for tag, x in zip(nlp.tags, ver.blocks()):
+    for tag, (design, x) in zip(nlp.tags, ver.designed_blocks()):
         fig = x.figures[ev.stroke]
         e = x.eccentricity
         guess[f"w_{tag}"] = [fig.omega_max / (w1 * e), fig.omega_min / (w1 * e)]
@@ -146,10 +152,13 @@ def start_guess(nlp, ver: Verification) -> dict:
         pad = np.full(nlp.slots - handovers.size, handovers[0] if handovers.size else 0.0)
         guess[f"phi_handover_{tag}"] = np.concatenate([handovers, pad])
         for name in nlp.turn:
-            maxima = get_quantity(name).maxima(ev.design, e, x.sampled)
+            maxima = get_quantity(name).maxima(design, e, x.sampled)
             guess[f"phi_q_{name}_{tag}"] = maxima.angles
             guess[f"constant_{name}_{tag}"] = maxima.constant
     for spec in nlp.specs:
         if spec.name not in ("ratio", "ripple"):
             guess[f"quantity_{spec.key}"] = [ver.measured.quantities[spec.key]]
+            for j in range(nlp.n_scenarios):     # a part's own value: near the nominal's
+                guess[f"quantity_{spec.key}_{scenario_tag(j)}"] = \
+                    guess[f"quantity_{spec.key}"]
     return guess

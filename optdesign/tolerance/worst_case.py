@@ -16,6 +16,10 @@ maximum over eccentricities and a minimum over hand-overs, and curves inside the
 
 Every figure compared and reported is the exact evaluator's; a part that does not assemble
 ends the search (δ is then infinite, the least transmission angle 0).
+
+The worst part for a bound on another quantity (a robust solve's housing radius, by the
+bound's key) has no vectorised form: its starts are the box's corners measured exactly (all of
+them up to 2⁵, else the gradient's corner and a sample), then stages 3's searches.
 """
 from __future__ import annotations
 
@@ -24,11 +28,14 @@ from typing import Mapping
 
 import numpy as np
 
+from optdesign.quantities import get_quantity
 from optdesign.tolerance.exact_part import exact_part
 from optdesign.tolerance.montecarlo import evaluate_offsets
 from optdesign.tolerance.parts import Box, box_of
 
 QUANTITIES = ("ripple", "transmission_angle")
+#: corners measured exactly as starts of a bound's worst part (all of them up to 2⁵)
+EXACT_CORNERS = 32
 #: corners evaluated at most (all of them up to 2⁸)
 MAX_CORNERS = 256
 #: uniform parts drawn for starts when the caller gives none
@@ -48,10 +55,10 @@ LOCAL_ITERATIONS = 30
 
 @dataclass
 class WorstCase:
-    """The worst part: ``value`` is the worst δ (``quantity="ripple"``) or the least
-    transmission angle in degrees (``"transmission_angle"``), exact; ``deviation`` its
-    offsets (mm, every length), ``lengths`` its design, ``evaluations`` the exact
-    evaluations spent."""
+    """The worst part: ``value`` is the worst δ (``quantity="ripple"``), the least
+    transmission angle in degrees (``"transmission_angle"``) or the worst value of a bound's
+    quantity (its key, e.g. ``"housing_radius"``), exact; ``deviation`` its offsets (mm,
+    every length), ``lengths`` its design, ``evaluations`` the exact evaluations spent."""
 
     quantity: str
     value: float
@@ -65,7 +72,8 @@ class WorstCase:
     history: list[float] = field(default_factory=list, repr=False)
 
     def to_dict(self) -> dict:
-        key = "delta" if self.quantity == "ripple" else "mu_min_deg"
+        key = {"ripple": "delta", "transmission_angle": "mu_min_deg"}.get(self.quantity,
+                                                                           self.quantity)
         return {"quantity": self.quantity, key: self.value, f"nominal_{key}": self.nominal,
                 "assembles": self.assembles, "on_corner": self.on_corner,
                 "deviation_mm": self.deviation, "design": self.lengths,
@@ -77,11 +85,33 @@ class _DoesNotAssemble(Exception):
         self.u = u
 
 
+def _worse(problem, quantity: str) -> float:
+    """+1 where a larger value of ``quantity`` (δ, or a bound's key) is worse, -1 where a
+    smaller one is (the transmission angle, the swing)."""
+    if quantity == "ripple":
+        return 1.0
+    if quantity == "transmission_angle":
+        return -1.0
+    spec = next(s for s in problem.constraints.quantities if s.key == quantity)
+    return 1.0 if get_quantity(spec.name).worst == "max" else -1.0
+
+
+def _figure(r: dict, quantity: str) -> float:
+    """The value of ``quantity`` in an exact part's figures (:func:`exact_part`)."""
+    if quantity == "ripple":
+        return r["delta"]
+    if quantity == "transmission_angle":
+        return r["mu_min_deg"]
+    return r["quantities"][quantity]
+
+
 class _Search:
-    """The exact figure of the box point u ∈ [-1, 1]^d, to maximise (g = δ, or g = −μ)."""
+    """The exact figure of the box point u ∈ [-1, 1]^d, to maximise (g = δ, g = −μ, or a
+    bound's quantity with the sign that makes larger worse)."""
 
     def __init__(self, problem, box: Box, quantity: str):
         self.problem, self.box, self.quantity = problem, box, quantity
+        self.sign = _worse(problem, quantity)
         self.dims = box.toleranced
         self.evaluations = 0
         self.best_u, self.best_g = None, -np.inf
@@ -98,7 +128,7 @@ class _Search:
         self.evaluations += 1
         if not r["assembles"]:
             raise _DoesNotAssemble(u)
-        g = r["delta"] if self.quantity == "ripple" else -r["mu_min_deg"]
+        g = self.sign * _figure(r, self.quantity)
         if g > self.best_g:
             self.best_u, self.best_g = u.copy(), g
             self.history.append(g)
@@ -121,37 +151,60 @@ class _Search:
 def worst_case(problem, lengths: Mapping[str, float] | None, tolerances, *,
                quantity: str = "ripple", candidates: np.ndarray | None = None,
                local_starts: int = LOCAL_STARTS, seed: int = 0) -> WorstCase:
-    """The largest δ (or least transmission angle) over the tolerance box around
-    ``lengths`` (design keys; missing ones at the problem's values).
+    """The largest δ (or least transmission angle, or the worst of the quantity of the
+    problem's bound keyed ``quantity``) over the tolerance box around ``lengths`` (design
+    keys; missing ones at the problem's values).
 
     ``tolerances``: a :class:`~optdesign.tolerance.section.ToleranceSection` or
     ``{length: ± mm}``. ``candidates``: offsets (parts × the mechanism's lengths, mm), e.g.
     a Monte Carlo sample, whose worst parts are starts too.
     """
-    if quantity not in QUANTITIES:
-        raise ValueError(f"quantity must be one of {', '.join(QUANTITIES)} (got {quantity!r})")
+    bounded = [s.key for s in problem.constraints.quantities]
+    if quantity not in QUANTITIES + tuple(bounded):
+        raise ValueError(f"quantity must be one of {', '.join(QUANTITIES + tuple(bounded))} "
+                         f"(got {quantity!r})")
     box = box_of(problem, lengths, tolerances)
     search = _Search(problem, box, quantity)
     d = search.dims.size
     nominal = exact_part(problem, box.values)
     search.evaluations += 1
-    nominal_value = nominal["delta"] if quantity == "ripple" else nominal["mu_min_deg"]
+    folded = np.inf * search.sign if quantity != "transmission_angle" else 0.0
+    nominal_value = _figure(nominal, quantity) if nominal["assembles"] else folded
     if not nominal["assembles"] or d == 0:
         return _result(search, box, np.zeros(d), nominal["assembles"], nominal_value,
                        nominal_value, 0)
     try:
-        starts = _starts(problem, box, search, nominal, candidates, seed)
-        chosen = _distinct(starts, local_starts)
-        ends = [_surrogate_local(problem, box, search, nominal, u) for u in chosen]
-        for u in _distinct([(0.0, u) for u in ends], len(ends), spacing=1e-6):
-            search.value(u)
+        if quantity in QUANTITIES:
+            starts = _starts(problem, box, search, nominal, candidates, seed)
+            chosen = _distinct(starts, local_starts)
+            ends = [_surrogate_local(problem, box, search, nominal, u) for u in chosen]
+            for u in _distinct([(0.0, u) for u in ends], len(ends), spacing=1e-6):
+                search.value(u)
+        else:
+            chosen = _exact_corners(search, seed)
         _local(search, search.best_u)
         _compass(search)
     except _DoesNotAssemble as broken:
-        return _result(search, box, broken.u, False,
-                       np.inf if quantity == "ripple" else 0.0, nominal_value, 0)
-    value = search.best_g if quantity == "ripple" else -search.best_g
-    return _result(search, box, search.best_u, True, value, nominal_value, len(chosen))
+        return _result(search, box, broken.u, False, folded, nominal_value, 0)
+    return _result(search, box, search.best_u, True, search.sign * search.best_g,
+                   nominal_value, len(chosen))
+
+
+def _exact_corners(search: _Search, seed: int) -> list[np.ndarray]:
+    """The starts of a bound's worst part, each measured exactly: every corner of the box
+    (up to :data:`EXACT_CORNERS`), else the corner the exact gradient at the nominal points
+    to and a sample of the others."""
+    d = search.dims.size
+    if 2 ** d <= EXACT_CORNERS:
+        corners = [2.0 * np.array(c, dtype=float) - 1.0 for c in np.ndindex(*(2,) * d)]
+    else:
+        _, slope = search.value_and_gradient(np.zeros(d))
+        rng = np.random.default_rng(seed)
+        corners = [np.where(-slope >= 0, 1.0, -1.0)] + \
+            list(rng.choice([-1.0, 1.0], size=(EXACT_CORNERS - 1, d)))
+    for u in corners:
+        search.value(u)
+    return corners
 
 
 def _result(search, box, u, assembles, value, nominal, starts) -> WorstCase:

@@ -1,5 +1,7 @@
-"""``optdesign analyze PROBLEM.yaml [--json]``."""
+"""``optdesign analyze PROBLEM.yaml [--json] [--out DIR] [--design FILE [--point K | --knee]]``."""
 from __future__ import annotations
+
+from optdesign.commands.design_source import add_arguments, chosen_design
 
 
 def add_parser(sub) -> None:
@@ -8,6 +10,7 @@ def add_parser(sub) -> None:
     p.add_argument("--json", action="store_true", help="print the contract's JSON")
     p.add_argument("--out", help="also draw regulation.png, δ and the ratio against the "
                                  "eccentricity, into this directory")
+    add_arguments(p)
     p.set_defaults(run=run)
 
 
@@ -17,14 +20,17 @@ def run(args) -> int:
     from optdesign.problem.loader import load_problem
 
     problem = load_problem(args.problem)
+    chosen = chosen_design(args, problem, one_count=False)
+    problem = chosen.problem(problem)
     out = None
     if args.out is not None:
         from optdesign.outputs.checks import prepare_out
         out = prepare_out(args.out, problem.name, files=("regulation.png",))
     result = analyze(problem)
     if args.json:
-        print(json_text(result.to_dict()))
+        print(json_text(chosen.stamped(result.to_dict())))
     else:
+        print(f"design: {chosen.source}")
         print(format_analysis(result, problem.name))
     if out is not None and result.assembles:
         from optdesign.analyses.analyze import regulation_curve
@@ -34,4 +40,13 @@ def run(args) -> int:
                                 f"{problem.name}: δ and ratio against e", out)
         if not args.json:
             print(f"wrote {path}")
-    return 0 if result.assembles else 1
+    if not result.assembles:
+        return 1
+    violated = [c["name"] for c in result.constraints if not c["satisfied"]]
+    if violated:
+        import sys
+
+        print(f"optdesign: {problem.source}: the design violates {', '.join(violated)}",
+              file=sys.stderr)
+        return 1
+    return 0

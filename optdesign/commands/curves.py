@@ -1,5 +1,8 @@
-"""``optdesign curves PROBLEM.yaml [--out DIR]``: position, velocity and acceleration analogues."""
+"""``optdesign curves PROBLEM.yaml [--out DIR] [--design FILE [--point K | --knee]]``:
+position, velocity and acceleration analogues."""
 from __future__ import annotations
+
+from optdesign.commands.design_source import add_arguments, chosen_design
 
 #: most crank samples of --samples (a figure of 1441 is already smooth)
 MAX_SAMPLES = 100_000
@@ -13,6 +16,7 @@ def add_parser(sub) -> None:
     p.add_argument("--eccentricity", type=float, default=1.0,
                    help="fraction e of the regulating length (default 1)")
     p.add_argument("--samples", type=int, default=1441, help="crank samples (default 1441)")
+    add_arguments(p)
     p.set_defaults(run=run)
 
 
@@ -25,6 +29,8 @@ def run(args) -> int:
     from optdesign.problem.loader import MIN_ECCENTRICITY, load_problem
 
     problem = load_problem(args.problem)
+    chosen = chosen_design(args, problem, one_count=False)
+    problem = chosen.problem(problem)
     if not 0 < args.eccentricity <= 1:
         raise UsageError(f"--eccentricity must lie in (0, 1] (got {args.eccentricity:g})")
     if args.eccentricity < MIN_ECCENTRICITY:
@@ -40,5 +46,6 @@ def run(args) -> int:
     curves = member_curves(design, problem.stroke, args.eccentricity, args.samples)
     path = write_curves(curves, f"{problem.name}: {problem.mechanism}, "
                                 f"e = {args.eccentricity:g}", out)
+    print(f"design: {chosen.source}")
     print(path)
     return 0

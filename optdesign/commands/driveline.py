@@ -1,10 +1,13 @@
-"""``optdesign driveline PROBLEM.yaml [--out DIR] [--json]``: the shaft's figures in the
+"""``optdesign driveline PROBLEM.yaml [--out DIR] [--json] [--design FILE [--point K |
+--knee]]``: the shaft's figures in the
 terminal (critical speed, margins, the speed check's verdict) and its figure, DIR/driveline.png.
 
 Exit 0 whatever the verdict (it is printed, and is ``verdict`` in the JSON); 1 when the design
 does not assemble (the shaft's own figures are still printed and drawn).
 """
 from __future__ import annotations
+
+from optdesign.commands.design_source import add_arguments, chosen_design
 
 
 def add_parser(sub) -> None:
@@ -14,6 +17,7 @@ def add_parser(sub) -> None:
     p.add_argument("problem", help="problem file (YAML) with a driveline: section")
     p.add_argument("--out", help="output directory (default results/NAME/)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    add_arguments(p)
     p.set_defaults(run=run)
 
 
@@ -27,6 +31,8 @@ def run(args) -> int:
 
     problem = load_problem(args.problem)
     section = problem.require_section("driveline")
+    chosen = chosen_design(args, problem, one_count=False)
+    problem = chosen.problem(problem)
     out = prepare_out(args.out, problem.name, files=("driveline.png",))
     result = analyze(problem)
     path = out / "driveline.png"
@@ -34,8 +40,9 @@ def run(args) -> int:
     write_driveline(section, path, operating_speed=report.get("operating_speed_rad_s"),
                     speed_limit=report.get("speed_limit_rad_s"))
     if args.json:
-        print(json_text(report))
+        print(json_text(chosen.stamped(report)))
     else:
+        print(f"design: {chosen.source}")
         print(format_driveline(report))
         print(f"wrote {path}")
     return 0 if result.assembles else 1

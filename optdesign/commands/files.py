@@ -12,7 +12,7 @@ from optdesign.outputs.atomic import (atomic_savefig, atomic_write_bytes, atomic
                                       atomic_write_text)
 
 #: every file ``solve`` may leave in its folder (the set :mod:`optdesign.outputs.folder` replaces)
-SOLVE_FILES = ("result.json", "summary.txt", "speeds.png", "mechanism.png")
+SOLVE_FILES = ("result.json", "summary.txt", "design.yaml", "speeds.png", "mechanism.png")
 #: every file ``pareto`` may leave in its folder (the set a fresh sweep clears)
 PARETO_FILES = ("points.jsonl", "pareto.csv", "pareto.json", "fronts.png", "lengths.png",
                 "knee_mechanism.png", "knee_speeds.png", "report.md", "report.html")
@@ -28,14 +28,20 @@ def save_figure(fig, path: Path, **kwargs) -> Path:
 
 
 # --------------------------------------------------------------------------- solve
-def write_solve(result, problem, out_dir: str | Path, plots: bool = True) -> list[Path]:
-    """result.json, summary.txt and (for a design) speeds.png and mechanism.png."""
+def write_solve(result, problem, out_dir: str | Path, plots: bool = True,
+                source_path=None) -> list[Path]:
+    """result.json, summary.txt and (for a design) design.yaml (the problem file at
+    ``source_path`` with the design fixed), speeds.png and mechanism.png."""
+    from optdesign.commands.design_source import design_yaml
     from optdesign.evaluation.design import Design
     from optdesign.solver.outputs import summary_text
 
     out = Path(out_dir)
     written = [atomic_write_json(out / "result.json", result.to_dict()),
                atomic_write_text(out / "summary.txt", summary_text(result, problem) + "\n")]
+    fixed = design_yaml(source_path, result)
+    if fixed is not None:
+        written.append(atomic_write_text(out / "design.yaml", fixed))
     if plots and result.design:
         from optdesign.figures.design import plot_mechanism, plot_speeds
 

@@ -1,4 +1,5 @@
-"""``optdesign simulate PROBLEM.yaml [--json] [--out DIR]``: the drive's steady cycle.
+"""``optdesign simulate PROBLEM.yaml [--json] [--out DIR] [--design FILE [--point K |
+--knee]]``: the drive's steady cycle.
 
 Needs a ``dynamics:`` section (:mod:`optdesign.dynamics.section`). Writes DIR/dynamics.json,
 DIR/dynamics_cycle.csv and the figures DIR/dynamics_angles.png (the paper's Fig. 2) and
@@ -10,6 +11,8 @@ reported and written; a failed integration writes dynamics.json alone).
 from __future__ import annotations
 
 import sys
+
+from optdesign.commands.design_source import add_arguments, chosen_design
 
 
 def add_parser(sub) -> None:
@@ -24,6 +27,7 @@ def add_parser(sub) -> None:
                    help="override dynamics.freewheel")
     p.add_argument("--crank", choices=("dynamic", "constant"), help="override dynamics.crank")
     p.add_argument("--cycles", type=int, help="override dynamics.cycles (most turns)")
+    add_arguments(p)
     p.set_defaults(run=run)
 
 
@@ -40,6 +44,8 @@ def run(args) -> int:
 
     problem = load_problem(args.problem)
     section = problem.require_section("dynamics")
+    chosen = chosen_design(args, problem, one_count=False)
+    problem = chosen.problem(problem)
     overrides = {k: getattr(args, k) for k in ("freewheel", "crank", "cycles")
                  if getattr(args, k) is not None}
     if overrides.get("cycles", 1) < 1:
@@ -58,8 +64,9 @@ def run(args) -> int:
         return _failed(problem, section, args, out, exc)
     write_simulation(result, out)
     if args.json:
-        print(json_text(result.to_dict()))
+        print(json_text(chosen.stamped(result.to_dict())))
     else:
+        print(f"design: {chosen.source}")
         print(format_result(result))
         print(f"wrote {out}/dynamics.json, dynamics_cycle.csv, dynamics_angles.png, "
               f"dynamics_speeds.png")

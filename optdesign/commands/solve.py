@@ -33,7 +33,8 @@ def run(args) -> int:
             result = solve(problem, progress=bar.update)
         raise_if_terminated()                     # nothing published after a SIGTERM
         files = folder.replace_with(
-            lambda into: write_solve(result, problem, into, plots=not args.no_plots))
+            lambda into: write_solve(result, problem, into, plots=not args.no_plots,
+                                     source_path=args.problem))
     if args.json:
         print(json_text(result.to_dict()))
     else:

@@ -1,5 +1,5 @@
 """``optdesign tolerance PROBLEM.yaml [--out DIR] [--samples N] [--seed S] [--json]
-[--design RESULT.json]``: will the design still be smooth when its parts are made to
+[--design FILE [--point K | --knee]]``: will the design still be smooth when its parts are made to
 tolerance?
 
 Needs a ``tolerances:`` section (:mod:`optdesign.tolerance.section`). Writes
@@ -11,6 +11,8 @@ assemble; 2 for bad input.
 from __future__ import annotations
 
 import sys
+
+from optdesign.commands.design_source import add_arguments, chosen_design
 
 #: most parts of --samples (tolerances.samples has the same limit)
 MAX_SAMPLES = 10_000_000
@@ -25,9 +27,7 @@ def add_parser(sub) -> None:
     p.add_argument("-o", "--out", help="output directory (default results/NAME/)")
     p.add_argument("--samples", type=int, help="Monte Carlo parts (default tolerances.samples)")
     p.add_argument("--seed", type=int, help="seed of the sample (default tolerances.seed)")
-    p.add_argument("--design", metavar="RESULT.json",
-                   help="analyse this design (a solve's result.json, or any JSON with a "
-                        "design object) instead of the file's fixed and initial values")
+    add_arguments(p)
     p.add_argument("--json", action="store_true", help="print tolerance.json")
     p.set_defaults(run=run)
 
@@ -53,18 +53,8 @@ def run(args) -> int:
         raise UsageError(f"--samples must lie in [1, {MAX_SAMPLES}] (got {args.samples})")
     if args.seed is not None and not 0 <= args.seed <= MAX_SEED:
         raise UsageError(f"--seed must lie in [0, {MAX_SEED}] (got {args.seed})")
-    if args.design is not None:
-        values = read_design(args.design, problem)
-        source = f"the design of {args.design}"
-    else:
-        values = None
-        count = problem.model.count_variable
-        if len(problem.counts()) > 1:
-            raise UsageError(f"{problem.source}: design.{count} is free; give a solved design "
-                             f"with --design RESULT.json")
-        source = ("the file's initial design (free lengths at their initial values; "
-                  "--design RESULT.json analyses a solved one)" if problem.free_lengths()
-                  else "the file's design")
+    chosen = chosen_design(args, problem)
+    values, source = chosen.values, chosen.source
     box = box_of(problem, values, section)
     out = prepare_out(args.out, problem.name, files=TOLERANCE_FILES)      # before any work
     from tqdm import tqdm
@@ -93,56 +83,3 @@ def run(args) -> int:
         print(format_tolerance(doc))
         print(f"wrote {', '.join(str(f) for f in files)}")
     return 0
-
-
-def read_design(path: str, problem) -> dict:
-    """The ``design`` object of a JSON file (a solve's result.json), checked against the
-    problem: every key a design key of its mechanism, every value a positive number. Any
-    fault is a UsageError naming the file."""
-    import json
-    import math
-    from pathlib import Path
-
-    from optdesign.errors import ProblemError, UsageError, shown
-    from optdesign.problem.yaml_text import read_text
-
-    try:                        # a regular file of at most 1 MiB (never /dev/zero or a FIFO)
-        text = read_text(Path(path))
-    except ProblemError as exc:
-        reason = str(exc).split(": ", 1)[-1]
-        raise UsageError(f"--design {shown(path)}: {reason}") from None
-    try:
-        data = json.loads(text)
-    except (ValueError, RecursionError):
-        raise UsageError(f"--design {shown(path)}: is not JSON") from None
-    design = data.get("design") if isinstance(data, dict) else None
-    if not isinstance(design, dict):
-        raise UsageError(f"--design {shown(path)}: has no design object (a solve that found "
-                         f"none writes design: null)")
-    if isinstance(data.get("mechanism"), str) and data["mechanism"] != problem.mechanism:
-        raise UsageError(f"--design {shown(path)}: is a design of {shown(data['mechanism'])}, "
-                         f"the problem's mechanism is {problem.mechanism}")
-    values = {}
-    for key, value in design.items():
-        if key not in problem.design:
-            name = key if isinstance(key, str) and key.isprintable() and len(key) <= 40 \
-                else shown(key, 40)
-            raise UsageError(f"--design {shown(path)}: design.{name} is not a design key of "
-                             f"{problem.mechanism}")
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or \
-                not math.isfinite(value) or value <= 0:
-            raise UsageError(f"--design {shown(path)}: design.{key} must be a positive number "
-                             f"(got {shown(value)})")
-        values[key] = float(value)
-    count = problem.model.count_variable
-    if count not in values and len(problem.counts()) > 1:
-        raise UsageError(f"--design {shown(path)}: design.{count} is missing")
-    if count in values:
-        admissible = problem.counts()
-        if values[count] != int(values[count]) or int(values[count]) not in admissible:
-            span = f"{admissible[0]}–{admissible[-1]}" if len(admissible) > 1 else \
-                str(admissible[0])
-            raise UsageError(f"--design {shown(path)}: design.{count} must be a whole number "
-                             f"the problem admits ({span}; got {shown(design[count])})")
-        values[count] = int(values[count])
-    return values

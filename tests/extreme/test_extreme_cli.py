@@ -44,8 +44,9 @@ def test_crank_longer_than_frame_exit_2(write_problem, capsys, command):
 def test_analyze_tiny_eccentricity_and_grashof_limit(write_problem, capsys):
     data = base_problem(design=PAPER | {"l2": 261.0},
                         regulation={"eccentricity": [1.0, 1e-6]})
-    code, out, _ = run(capsys, "analyze", str(write_problem(data)), "--json")
-    assert code == 0
+    code, out, err = run(capsys, "analyze", str(write_problem(data)), "--json")
+    assert code == 1             # it assembles, and breaks the file's angle of 40° (exit 1)
+    assert err.count("\n") == 1 and "the design violates transmission_angle" in err
     res = json.loads(out)
     assert res["min_transmission_angle_deg"] == pytest.approx(0.0, abs=1e-3)
     assert "NaN" not in out and "Infinity" not in out

@@ -129,8 +129,11 @@ def test_analyze_reports_and_draws_the_worst_eccentricity(tmp_path, capsys):
     data["objective"]["max_ripple"] = 0.14885
     path = tmp_path / "capped.yaml"
     path.write_text(yaml.safe_dump(data))
-    assert main(["analyze", str(path), "--json", "--out", str(tmp_path / "out")]) == 0
-    doc = json.loads(capsys.readouterr().out)
+    # the cap is violated inside the interval: the figures are printed and drawn, exit 1
+    assert main(["analyze", str(path), "--json", "--out", str(tmp_path / "out")]) == 1
+    captured = capsys.readouterr()
+    assert captured.err.endswith("the design violates max_ripple\n")
+    doc = json.loads(captured.out)
     worst = doc["regulation_range"]
     ends = [r["strokes"]["forward"]["delta"] for r in doc["regulation"]]
     assert worst["eccentricity_range"] == [0.2, 1.0] and 0.8 < worst["worst_eccentricity"] < 0.95

@@ -86,7 +86,7 @@ def test_parts_that_break_a_rule_point_at_the_robust_solve(solved):
 
 def test_the_terminal_table(solved):
     text = format_tolerance(solved[2])
-    assert text.startswith("sharkov2022_disc_tolerance: tolerance analysis of the design of ")
+    assert text.startswith("sharkov2022_disc_tolerance: tolerance analysis of the optimum of ")
     assert "l1 ±0.02" in text and "worst δ part:" in text and "least μ part:" in text
     lines = {line.split()[0]: line.split() for line in text.splitlines() if line.strip()}
     assert float(lines["δ"][1]) == pytest.approx(solved[2]["nominal"]["delta"], abs=1e-6)

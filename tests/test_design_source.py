@@ -1,0 +1,113 @@
+"""One design through every command: ``solve`` writes design.yaml beside result.json, and every
+command that evaluates a design takes it with ``--design`` (a result.json, a design.yaml, or a
+front's pareto.csv with ``--point K`` or ``--knee``) and says which design it used."""
+import csv
+import json
+
+import pytest
+import yaml
+
+from optdesign.cli import main
+from tests.conftest import ROOT, run_main
+
+DISC = ROOT / "problems" / "sharkov2022_disc.yaml"
+DYNAMICS = ROOT / "problems" / "sharkov2022_dynamics.yaml"
+
+
+@pytest.fixture(scope="module")
+def solved(tmp_path_factory):
+    out = tmp_path_factory.mktemp("solved")
+    code, _ = run_main(["solve", DISC, "--out", out, "--no-plots"])
+    assert code == 0
+    return out, json.loads((out / "result.json").read_text())
+
+
+def test_solve_writes_the_problem_with_its_optimum_fixed(solved):
+    out, result = solved
+    data = yaml.safe_load((out / "design.yaml").read_text())
+    assert data["name"] == "sharkov2022_disc_design"
+    assert data["design"] == result["design"]
+    assert data["constraints"] == yaml.safe_load(DISC.read_text())["constraints"]
+    # runnable as it is: its own design is the optimum, exactly
+    code, text = run_main(["analyze", out / "design.yaml", "--json"])
+    analysed = json.loads(text)
+    assert code == 0 and analysed["design_source"] == "the file's design"
+    assert analysed["strokes"]["forward"]["delta"] == result["delta"]
+
+
+@pytest.mark.parametrize("name", ["result.json", "design.yaml"])
+def test_analyze_takes_the_solved_design(solved, name):
+    out, result = solved
+    code, text = run_main(["analyze", DISC, "--design", out / name])
+    first = text.splitlines()[0]
+    assert code == 0
+    assert first == f"design: {'the optimum' if name == 'result.json' else 'the design'} of " \
+                    f"{out / name}"
+    code, text = run_main(["analyze", DISC, "--design", out / name, "--json"])
+    analysed = json.loads(text)
+    assert analysed["design"] == result["design"]
+    assert analysed["strokes"]["forward"]["delta"] == result["delta"]
+
+
+def test_simulate_runs_the_solved_design_not_the_initial_one(solved, tmp_path):
+    out, result = solved
+    code, text = run_main(["simulate", DYNAMICS, "--design", out / "result.json", "--json",
+                           "--out", tmp_path])
+    simulated = json.loads(text)
+    assert code == 0 and simulated["design_source"] == f"the optimum of {out / 'result.json'}"
+    assert simulated["delta_kinematic"] == pytest.approx(result["delta"], rel=1e-6)
+    code, text = run_main(["simulate", DYNAMICS, "--json", "--out", tmp_path])
+    assert json.loads(text)["delta_kinematic"] > result["delta"] + 0.1
+
+
+def _front(tmp_path, result):
+    """A front's two files as a sweep writes them: a failed point, then two verified ones,
+    the second the knee."""
+    design = result["design"]
+    rows = [{"phases": 6, "delta": "", "ratio": "", **{k: "" for k in design if k != "phases"},
+             "status": "failed"},
+            {"phases": 6, "delta": 0.2, "ratio": 0.4,
+             **{k: v for k, v in design.items() if k != "phases"} | {"l3": 30.0},
+             "status": "optimal"},
+            {"phases": 6, "delta": result["delta"], "ratio": result["ratio"],
+             **{k: v for k, v in design.items() if k != "phases"}, "status": "optimal"}]
+    with open(tmp_path / "pareto.csv", "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    (tmp_path / "pareto.json").write_text(json.dumps({"knee": rows[2], "points": rows}))
+    return tmp_path / "pareto.csv"
+
+
+def test_a_point_of_a_front_or_its_knee(solved, tmp_path):
+    _, result = solved
+    front = _front(tmp_path, result)
+    code, text = run_main(["analyze", DISC, "--design", front, "--point", "2", "--json"])
+    analysed = json.loads(text)
+    assert code == 0 and analysed["design"]["l3"] == 30.0
+    assert analysed["design_source"].startswith(f"point 2 of the front {front} (δ = 0.2")
+    code, text = run_main(["analyze", DISC, "--design", front, "--knee", "--json"])
+    analysed = json.loads(text)
+    assert analysed["design"] == result["design"]
+    assert analysed["design_source"].startswith(f"the knee of the front {front}")
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["--point", "1"], "--point picks a point of a front: give the front with --design"),
+    (["--design", "{front}", "--point", "1"], "--point 1: that point of"),
+    (["--design", "{front}", "--point", "4"], "--point must lie in [1, 3]"),
+    (["--design", "{front}"], "a front holds many designs: pick one with --point K or --knee"),
+    (["--design", "{front}", "--point", "2", "--knee"], "--point and --knee each pick a point"),
+    (["--design", "{free}"], "design.l0 is not fixed"),
+    (["--design", "{other}"], "is a design of 'slotted_lever', the problem's mechanism is fourbar_converter"),
+])
+def test_a_design_that_cannot_be_taken_is_one_line_and_exit_2(solved, tmp_path, capsys,
+                                                               argv, message):
+    _, result = solved
+    files = {"front": _front(tmp_path, result), "free": DISC,
+             "other": tmp_path / "other.json"}
+    files["other"].write_text(json.dumps({"mechanism": "slotted_lever", "design": {}}))
+    argv = [a.format(**files) for a in argv]
+    assert main(["analyze", str(DISC), *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err, err

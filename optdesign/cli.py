@@ -3,7 +3,8 @@
 Exit codes (docs/contract.md): 0 success; 1 solved but infeasible or failed (the
 result is still written), or the run could not finish (out of memory, a write that failed, an
 internal error); 2 bad input or usage, one line on stderr naming file and key. Every failure
-is one line on stderr; ``--debug`` adds the traceback.
+is one line on stderr; ``--debug`` adds the traceback. A valid file whose values look like a unit
+mistake (:mod:`optdesign.problem.plausibility`) adds one warning line and goes on.
 """
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ import os
 import sys
 from importlib import import_module
 
-from optdesign.errors import OptDesignError, ProblemError, UsageError, shown
+from optdesign.errors import OptDesignError, ProblemError, UnitWarning, UsageError, shown
 
 #: longest line the command writes on stderr
 MAX_MESSAGE_CHARS = 1000
@@ -54,7 +55,28 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    import warnings
+
     args = build_parser().parse_args(argv)
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", UnitWarning)
+        shown_before = warnings.showwarning
+        warnings.showwarning = lambda message, category, *rest, **kw: (
+            _warn(message) if issubclass(category, UnitWarning)
+            else shown_before(message, category, *rest, **kw))
+        return _run(args, argv)
+
+
+def _warn(message) -> None:
+    """A problem file's likely unit mistake: one line on stderr, and the command goes on."""
+    try:
+        print(one_line(f"optdesign: warning: {message}"), file=sys.stderr, flush=True)
+    except (OSError, ValueError):
+        pass
+
+
+def _run(args, argv) -> int:
+    """The command of ``args``, its outcome mapped to an exit code."""
     if argv is None:        # run as the `optdesign` program: it writes figures to files only
         os.environ.setdefault("MPLBACKEND", "Agg")
         # a figure's layout warning is no line for the user's stderr: the figure is written

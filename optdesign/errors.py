@@ -28,6 +28,11 @@ class SolveError(OptDesignError):
     """The optimiser could not produce a result at all (not raised for a mere failed solve)."""
 
 
+class UnitWarning(UserWarning):
+    """A problem file's value is valid but likely in another unit (a length in metres, an
+    angle in radians, a speed in rpm): the command goes on, with one line on stderr."""
+
+
 #: longest repr of a user's value that a message quotes
 SHOWN_CHARS = 60
 

@@ -313,6 +313,11 @@ class Objective:
         """The ranking key of a count's optimum (a PhaseResult)."""
         return self.rank(result.delta, result.ratio)
 
+    def per_nlp_unit(self, m) -> float:
+        """The objective's units per unit of the NLP's objective at the measured design
+        ``m``: what IPOPT's multipliers are scaled by to give d objective / d bound."""
+        return 1.0
+
 
 class LeastRipple(Objective):
     """The worst δ over the listed eccentricities."""
@@ -366,6 +371,25 @@ class QuantityObjective(Objective):
         return self.sign * result.quantities["values"][self.quantity]
 
 
+class LargestLeastAngle(QuantityObjective):
+    """The largest least transmission angle over the turn and the listed eccentricities
+    (``minimize: -transmission_angle``): the NLP minimises an epigraph z >= cos²μ at every
+    tracked extreme of cos μ, the least angle's cos² (:mod:`optdesign.solver.nlp`); the
+    exact key is the least angle itself (degrees, negated); the worst δ breaks ties."""
+
+    quantity = "transmission_angle"
+    name = "-transmission_angle"
+    symbol = "(-μ_min)"
+
+    def expression(self, q):
+        return q.quantities[self.quantity] + RIPPLE_TIE_BREAK * q.worst_ripple
+
+    def per_nlp_unit(self, m) -> float:
+        """Degrees of −μ_min per unit of cos²μ_min: d cos²μ / d(−μ) = sin 2μ per radian."""
+        slope = math.sin(2 * math.radians(m.quantities[self.quantity])) * math.pi / 180.0
+        return 1.0 / slope if slope > 0 else math.nan
+
+
 def _quantity_objectives() -> dict[str, type[Objective]]:
     """``minimize: NAME`` for every quantity tracked over the turn whose larger values are
     worse, ``minimize: -NAME`` for those whose smaller ones are."""
@@ -388,7 +412,8 @@ def _objectives_of(names: tuple[str, ...]) -> dict[str, type[Objective]]:
 
 
 #: the objectives ``objective.minimize`` may name besides the quantities' own
-OBJECTIVES: dict[str, type[Objective]] = {"ripple": LeastRipple, "-ratio": LargestRatio}
+OBJECTIVES: dict[str, type[Objective]] = {"ripple": LeastRipple, "-ratio": LargestRatio,
+                                          "-transmission_angle": LargestLeastAngle}
 
 
 def objectives() -> dict[str, type[Objective]]:

@@ -29,6 +29,7 @@ from optdesign.quantities.criteria import (LengthConstraint, TOL_QUANTITY_REL, c
                                            searched_quantities)
 from optdesign.solver.accuracy import solve_accuracy
 from optdesign.solver.nlp import Held, PhaseNLP, SECONDARY_BUDGET, is_robust
+from optdesign.solver.reachable import reach_of
 from optdesign.solver.result import PhaseResult, SolveResult, StartRecord
 from optdesign.solver.robust import next_scenarios, robust_verdict, worst_cases
 from optdesign.solver.screening import line_seeds, screen
@@ -224,7 +225,8 @@ class PhaseSolver:
                              time_s=time.perf_counter() - t0,
                              feasible=bool(ver.feasible and status in SUCCESS),
                              delta=ver.delta, note=note, ratio_multiplier=multiplier,
-                             active=active if status in SUCCESS else [])
+                             active=_in_objective_units(problem, active, ver)
+                             if status in SUCCESS else [])
         return Outcome(record, ver, values, surrogate)
 
     def at(self, min_ratio=None, max_ripple=None, bound=None):
@@ -429,12 +431,14 @@ def workers_for(problem) -> int:
 
 
 def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
-                workers: int | None = None, neighbours: list[dict] = ()) -> PhaseResult:
+                workers: int | None = None, neighbours: list[dict] = (),
+                explain: bool = True) -> PhaseResult:
     """Best verified optimum of one phase count: screen, then polish the best basins (in
     ``workers`` processes at once; default :func:`workers_for`; 1 with a given ``solver``,
     whose built NLPs are kept for re-use). ``neighbours``: optima of other phase counts,
     screened with the box (continuation: the optimum of n - 1 often lies in the best basin
-    of n, and ranks first when it does)."""
+    of n, and ranks first when it does). ``explain``: when no start meets the problem, tell
+    how far its binding constraint is out of reach (:func:`_explain`)."""
     if not problem.free_lengths():
         fixed = _fixed_infeasible(problem, count)
         if fixed is not None:
@@ -461,33 +465,37 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
                           f"eccentricity with {count} phases")
         return result
     result = _no_optimum(result)
-    if result.binding == "min_ratio" and problem.objective.min_ratio > 0:
-        _reachable_ratio(problem, count, result)
+    if explain:
+        _explain(problem, count, result)
     return result
 
 
-#: the ripple cap of the largest-ratio solve that tells how far a ratio floor is out of reach
-LOOSE_RIPPLE = 10.0
-
-
-def _reachable_ratio(problem, count: int, result: PhaseResult) -> None:
-    """The ratio floor binds and no start met it: the largest ratio any design in the bounds
-    reaches (the same constraints, the floor dropped, the ratio maximised), so the verdict
-    says by how much; below the floor it is ``infeasible``, with that value."""
-    free = replace(problem, objective=replace(problem.objective, minimize="-ratio",
-                                              min_ratio=0.0, max_ripple=LOOSE_RIPPLE,
-                                              robust="none"))
-    best = solve_phase(free, count, workers=1)
-    if best.status != "optimal":
+def _explain(problem, count: int, result: PhaseResult) -> None:
+    """No start met the problem: how far its binding constraint is out of reach
+    (:mod:`optdesign.solver.reachable`); beyond the bound the count is ``infeasible`` by that
+    much, within it the message says that more starts may find a design."""
+    reach = reach_of(problem, count, result.binding, solve_phase)
+    if reach is None:
         return
-    if best.ratio < problem.objective.min_ratio:
+    result.reachable = reach.to_dict()
+    if reach.out_of_reach:
         result.status = "infeasible"
-        result.message = (f"min_ratio {problem.objective.min_ratio:g} is out of reach: the "
-                          f"largest ratio any design in the bounds reaches with {count} phases "
-                          f"is {best.ratio:.6g} (verified), under every other constraint")
+        result.message = reach.text(problem.model.count_variable, count)
     else:
-        result.message += (f"; a design in the bounds reaches ratio {best.ratio:.6g}: more "
-                           f"starts (solver.starts, solver.screen) may find it")
+        unit = "" if reach.unit in ("", "-") else f" {reach.unit}"
+        result.message += (f"; a design in the bounds reaches {reach.constraint} "
+                           f"{reach.value:.6g}{unit}: more starts (solver.starts, "
+                           f"solver.screen) may find one that meets every constraint")
+
+
+def _in_objective_units(problem, active: list[dict], ver: Verification) -> list[dict]:
+    """The active set's sensitivities in the objective's units (the NLP may minimise another
+    figure of it: cos²μ for the largest least angle)."""
+    if ver.measured is None:
+        return active
+    scale = objective_of(problem).per_nlp_unit(ver.measured)
+    return active if scale == 1.0 else [a | {"sensitivity": a["sensitivity"] * scale}
+                                        for a in active]
 
 
 def tightened(problem, bound):

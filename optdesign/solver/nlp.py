@@ -423,7 +423,8 @@ class PhaseNLP:
             b.row("ripple_epigraph_slots", ca.vertcat(*[t - r for r in ripples[len(self.eccs):]]))
         q = Quantities(lengths=lengths, ratio=means[0], worst_ripple=t,
                        peak_speed=peaks[0] * P.input_speed, cos_mu_sq=cos_sq,
-                       quantities=self._quantities(b, t, ripples, means, self.tags))
+                       quantities=self._quantities(b, t, ripples, means, self.tags,
+                                                   cos_sq))
         self._criterion_blocks = []
         for criterion in self.criteria:
             for name, expr in criterion.rows(q):
@@ -442,7 +443,7 @@ class PhaseNLP:
             qj = Quantities(lengths=part, ratio=means[first], worst_ripple=t,
                             peak_speed=peaks[first] * P.input_speed, cos_mu_sq=sq,
                             quantities=self._quantities(b, t, ripples[own], means[own],
-                                                        self.scenario_tags[j],
+                                                        self.scenario_tags[j], sq,
                                                         scenario_tag(j)))
             for criterion in self.criteria:
                 for name, expr in criterion.rows(qj):
@@ -460,13 +461,16 @@ class PhaseNLP:
                                      [ca.vertcat(*ripples), ca.vertcat(*means),
                                       ca.vertcat(*peaks)])
 
-    def _quantities(self, b: "_Builder", t, ripples, means, tags, scenario: str = "") -> dict:
+    def _quantities(self, b: "_Builder", t, ripples, means, tags, cos_sq: dict,
+                    scenario: str = "") -> dict:
         """Each quantity spec's value for one part (the nominal, or ``scenario``'s part):
         the envelope's own expression for the ratio and the ripple, else an epigraph
         variable z over the spec's eccentricity blocks with rows z - c >= 0 for every figure
         c of a quantity whose larger values are worse (c - z >= 0 for the others): a bound on
         z, or z as the objective, holds every figure. ``tags``, ``ripples`` and ``means``:
-        the part's blocks in :attr:`eccs` order. The nominal's spec at its worst covers the
+        the part's blocks in :attr:`eccs` order; ``cos_sq`` its cos²μ rows by tag, whose
+        epigraph is the least transmission angle's figure (cos² of it: smaller is better). The
+        nominal's spec at its worst covers the
         regulation interval's slots too, a row block per slot (free while the slot is idle);
         a scenario's variables and rows carry its name (fixed and free while it is idle)."""
         out = {}
@@ -477,6 +481,12 @@ class PhaseNLP:
                 out[spec.key] = means[0]
             elif spec.name == "ripple":
                 out[spec.key] = t if spec.at is None else ripples[tags.index(at[0])]
+            elif spec.name == "transmission_angle":
+                z = b.variable(f"quantity_{spec.key}" + (f"_{scenario}" if scenario else ""), 1)
+                rows = ca.vertcat(*[cos_sq[tag] for tag in at])
+                b.row(f"quantity_epigraph_{spec.key}" + (f"[{scenario}]" if scenario else ""),
+                      z - rows)
+                out[spec.key] = z
             else:
                 z = b.variable(f"quantity_{spec.key}" + (f"_{scenario}" if scenario else ""), 1)
                 sign = 1 if get_quantity(spec.name).worst == "max" else -1

@@ -60,6 +60,9 @@ class PhaseResult:
     #: a robust solve: the tolerance box's worst δ and least transmission angle of the optimum
     worst_case_delta: float | None = None
     worst_case_min_transmission_angle_deg: float | None = None
+    #: no start met the problem: the nearest value of the binding constraint's figure any
+    #: design in the bounds reaches (:class:`optdesign.solver.reachable.Reach`), else empty
+    reachable: dict = field(default_factory=dict)
     #: ... and the worst of each bound's quantity over the box, by the bound's key
     worst_case_quantities: dict = field(default_factory=dict)
     #: every quantity's exact value of the optimum (:func:`optdesign.quantities.quantities_of`:

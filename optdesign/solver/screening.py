@@ -130,7 +130,7 @@ def _evaluate(problem, count, base, free, X, sampled: dict | None = None
                                               ANGLE_SLACK_DEG, 0.0))),
                     math.sqrt(1.0 - c.assembly_margin))
     violation = np.full(S, -np.inf)
-    ripples, ratio, peaks = [], None, {}
+    ripples, ratio, peaks, angles = [], None, {}, {}
     with np.errstate(all="ignore"):
         for e in eccentricities_of(problem):
             P = np.vstack([lengths[k] * (e if k == model.regulating_variable else 1.0)
@@ -147,11 +147,14 @@ def _evaluate(problem, count, base, free, X, sampled: dict | None = None
             if e == 1.0:
                 ratio, peak = mean, hi
             worst_cos = np.abs(cos_mu).reshape(n, S, N).max(axis=(0, 2))
+            if e in problem.eccentricities:
+                angles[e] = np.degrees(np.arccos(np.clip(worst_cos, 0.0, 1.0)))
             bad = ~np.isfinite(worst_cos) | ~np.all(np.isfinite(f), axis=(0, 2)) | \
                 (worst_cos > 1.0)
             violation = np.maximum(violation, np.where(bad, np.inf, worst_cos - cos_limit))
         q = _Sampled(lengths, ratio, np.max(ripples, axis=0), peak * problem.input_speed,
-                     sampled_quantities(problem, count, lengths, ripples, peaks, ratio))
+                     sampled_quantities(problem, count, lengths, ripples, peaks, ratio,
+                                        angles))
         for criterion in constraints_of(problem):
             if isinstance(criterion, (TransmissionAngle, SectionConstraint)):
                 continue        # the angle is filtered above, with slack; sections at the check
@@ -196,10 +199,11 @@ class _Sampled:
 
 
 def sampled_quantities(problem, count: int, lengths: dict, ripples: list, peaks: dict,
-                       ratio: np.ndarray) -> dict:
+                       ratio: np.ndarray, angles: dict | None = None) -> dict:
     """Each quantity spec's sampled value per screened design: a turn quantity's maxima on
     the screening's grid (:meth:`~optdesign.quantities.base.TurnQuantity.sampled`), the
-    envelope's sampled peak, ripple and ratio; the worst over the spec's eccentricities."""
+    envelope's sampled peak, ripple, ratio and least transmission angle (``angles``, deg per
+    eccentricity); the worst over the spec's eccentricities."""
     model = problem.model
     listed = list(problem.eccentricities)
     options = tuple(sorted(problem.options.items()))
@@ -213,6 +217,8 @@ def sampled_quantities(problem, count: int, lengths: dict, ripples: list, peaks:
             values = [ripples[listed.index(e)] for e in eccs]
         elif spec.name == "peak_speed":
             values = [peaks[e] for e in eccs]
+        elif spec.name == "transmission_angle":
+            values = [angles[e] for e in eccs]
         else:
             g, _ = quantity.function(model, count, options)
             S = len(next(iter(lengths.values())))

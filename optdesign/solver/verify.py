@@ -157,7 +157,10 @@ def start_guess(nlp, ver: Verification) -> dict:
             guess[f"constant_{name}_{tag}"] = maxima.constant
     for spec in nlp.specs:
         if spec.name not in ("ratio", "ripple"):
-            guess[f"quantity_{spec.key}"] = [ver.measured.quantities[spec.key]]
+            value = ver.measured.quantities[spec.key]
+            if spec.name == "transmission_angle":       # the NLP's figure is cos²μ_min
+                value = math.cos(math.radians(value)) ** 2
+            guess[f"quantity_{spec.key}"] = [value]
             for j in range(nlp.n_scenarios):     # a part's own value: near the nominal's
                 guess[f"quantity_{spec.key}_{scenario_tag(j)}"] = \
                     guess[f"quantity_{spec.key}"]

@@ -63,8 +63,8 @@ def test_infeasible_ratio_is_detected_and_named(write_problem, tmp_path, capsys)
     assert json.loads((out / "result.json").read_text())["status"] == "infeasible"
     # how far out of reach: the largest ratio of the box (the disc problem's 0.728894, with l2
     # on its bound: the least-ripple design's ratio too), verified
-    assert "min_ratio 3 is out of reach: the largest ratio any design in the bounds reaches " \
-        "with 6 phases is 0.72889" in result["per_phase"][0]["message"]
+    assert "min_ratio at least 3 is out of reach: the largest ratio any design in the bounds " \
+        "reaches with 6 phases is 0.72889" in result["per_phase"][0]["message"]
 
 
 def test_a_pin_radius_beyond_the_box_is_infeasible_with_the_reachable_value(write_problem):

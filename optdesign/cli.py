@@ -29,6 +29,7 @@ COMMANDS = [
     "optdesign.commands.bench",
     "optdesign.commands.pareto",
     "optdesign.commands.tolerance",
+    "optdesign.commands.export",
     "optdesign.commands.schema",
 ]
 

@@ -1,4 +1,7 @@
-"""Shared fixtures: the paper's design and a writer of problem files."""
+"""Shared fixtures: the paper's design, a writer of problem files, headless Chromium."""
+import os
+import shutil
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -76,3 +79,38 @@ def add_quantity(tmp_path, monkeypatch):
 
     yield add
     quantities._registry.cache_clear()
+
+
+#: Chromium's flags for a headless run that reaches no network
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+@pytest.fixture(scope="session")
+def chromium():
+    """Headless Chromium's path: the Debian package, installed as root with apt-get when
+    missing; the test is skipped with the reason otherwise."""
+    path = shutil.which("chromium") or ("/usr/bin/chromium"
+                                        if os.path.exists("/usr/bin/chromium") else None)
+    if path is None and hasattr(os, "geteuid") and os.geteuid() == 0 and \
+            shutil.which("apt-get"):
+        env = os.environ | {"DEBIAN_FRONTEND": "noninteractive"}
+        for step in (["apt-get", "install", "-y", "chromium"],          # lists present
+                     ["apt-get", "update"], ["apt-get", "install", "-y", "chromium"]):
+            subprocess.run(step, capture_output=True, timeout=900, check=False, env=env)
+            if shutil.which("chromium"):
+                break
+        path = shutil.which("chromium")
+    if path is None:
+        pytest.skip("headless Chromium not found: install the Debian package `chromium` "
+                    "(apt-get install -y chromium, as root) to render the pages")
+    return path
+
+
+def chromium_run(chromium, tmp_path, *args) -> str:
+    """Chromium's stdout for ``args`` (e.g. ``--screenshot=F.png``), with a profile of its
+    own under ``tmp_path``."""
+    cmd = [chromium, *FLAGS, f"--user-data-dir={tmp_path / 'profile'}", *args]
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=60, check=False)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return done.stdout

@@ -6,49 +6,19 @@ otherwise the test is skipped with the reason.
 """
 import base64
 import io
-import os
 import re
-import shutil
-import subprocess
 
 import pytest
 
 from optdesign.problem.loader import load_problem
+from tests.conftest import chromium_run as _run
 
-FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
 #: written into a copy of the page: once loaded, the natural width of every image (-1 for one
 #: not loaded), read back from the DOM Chromium dumps
 PROBE = ('<script>window.addEventListener("load", function () {'
          'var w = [].map.call(document.images, function (i) {'
          'return i.complete ? i.naturalWidth : -1; });'
          'document.body.setAttribute("data-image-widths", w.join(",")); });</script>')
-
-
-@pytest.fixture(scope="module")
-def chromium():
-    path = shutil.which("chromium") or ("/usr/bin/chromium"
-                                        if os.path.exists("/usr/bin/chromium") else None)
-    if path is None and hasattr(os, "geteuid") and os.geteuid() == 0 and \
-            shutil.which("apt-get"):
-        env = os.environ | {"DEBIAN_FRONTEND": "noninteractive"}
-        for step in (["apt-get", "install", "-y", "chromium"],          # lists present
-                     ["apt-get", "update"], ["apt-get", "install", "-y", "chromium"]):
-            subprocess.run(step, capture_output=True, timeout=900, check=False, env=env)
-            if shutil.which("chromium"):
-                break
-        path = shutil.which("chromium")
-    if path is None:
-        pytest.skip("headless Chromium not found: install the Debian package `chromium` "
-                    "(apt-get install -y chromium, as root) to render report.html")
-    return path
-
-
-def _run(chromium, tmp_path, *args) -> str:
-    cmd = [chromium, *FLAGS, f"--user-data-dir={tmp_path / 'profile'}", *args]
-    done = subprocess.run(cmd, capture_output=True, text=True, timeout=60, check=False)
-    assert done.returncode == 0, done.stderr[-2000:]
-    return done.stdout
 
 
 @pytest.fixture(scope="module")

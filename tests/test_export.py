@@ -1,0 +1,109 @@
+"""``optdesign export``: the solved linkage to scale as DXF (read back here with ezdxf), the same
+drawing as SVG (rendered in headless Chromium), and its trajectories as CSV."""
+import math
+
+import numpy as np
+import pytest
+
+from optdesign.cli import main
+from tests.conftest import ROOT, chromium_run, run_main
+
+DISC = ROOT / "problems" / "sharkov2022_disc.yaml"
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory):
+    import json
+
+    out = tmp_path_factory.mktemp("exported")
+    code, _ = run_main(["solve", DISC, "--out", out / "solved", "--no-plots"])
+    assert code == 0
+    code, text = run_main(["export", DISC, "--design", out / "solved" / "design.yaml",
+                           "--angle", "30", "--out", out / "export"])
+    assert code == 0
+    assert text.splitlines()[0] == f"design: the design of {out / 'solved' / 'design.yaml'}"
+    return out / "export", json.loads((out / "solved" / "result.json").read_text())
+
+
+def test_the_dxf_reads_back_with_the_lengths_to_1e_9_mm(exported):
+    import ezdxf
+
+    out, result = exported
+    design = result["design"]
+    doc = ezdxf.readfile(out / "linkage.dxf")
+    assert doc.units == ezdxf.units.MM
+    # the title's values at full precision, as custom header properties
+    for k in ("l0", "l1", "l2", "l2_prime", "l3"):
+        assert float(doc.header.custom_vars.get(f"{k} (mm)")) == pytest.approx(design[k],
+                                                                                abs=1e-9)
+    assert int(doc.header.custom_vars.get("phases")) == 6
+    # the drawing itself: every link's line as long as its length, to 1e-9 mm
+    lines = {}
+    for line in doc.modelspace().query("LINE"):
+        start, end = np.array(line.dxf.start)[:2], np.array(line.dxf.end)[:2]
+        lines.setdefault(line.dxf.layer, []).append(float(np.hypot(*(end - start))))
+    assert lines["CRANK"] == pytest.approx([design["l1"]], abs=1e-9)
+    assert lines["ROCKER"] == pytest.approx([design["l3"]] * 6, abs=1e-9)
+    assert lines["FRAME"] == pytest.approx([design["l0"]] * 6, abs=1e-9)     # O to O_i
+    couplers = lines["COUPLER"]
+    assert sum(abs(x - design["l2"]) < 1e-9 for x in couplers) == 1           # A B1
+    assert sum(abs(x - design["l2_prime"]) < 1e-9 for x in couplers) == 5     # C_i B_i
+    pin = design["l2"] - design["l2_prime"]
+    assert sum(abs(x - pin) < 1e-9 for x in couplers) == 5                    # A C_i
+    # the crank at 30° and a swing arc per rocker
+    crank = next(iter(doc.modelspace().query('LINE[layer=="CRANK"]')))
+    start, end = np.array(crank.dxf.start)[:2], np.array(crank.dxf.end)[:2]
+    tip = end if np.hypot(*start) < 1e-9 else start
+    assert math.degrees(math.atan2(tip[1], tip[0])) == pytest.approx(30.0, abs=1e-9)
+    assert len(doc.modelspace().query('ARC[layer=="PATHS"]')) == 6
+    assert {"FRAME", "CRANK", "COUPLER", "ROCKER", "PATHS", "TITLE"} <= \
+        {layer.dxf.name for layer in doc.layers}
+
+
+def test_the_svg_is_the_drawing_and_chromium_draws_it(exported, chromium, tmp_path):
+    from PIL import Image
+
+    out, _ = exported
+    svg = (out / "linkage.svg").read_text()
+    assert svg.lstrip().startswith("<?xml") and "<svg" in svg and 'width="' in svg
+    page = tmp_path / "page.html"
+    page.write_text(f'<html><body style="margin:0"><img src="{out / "linkage.svg"}" '
+                    f'style="width:900px"></body></html>')
+    shot = tmp_path / "linkage.png"
+    chromium_run(chromium, tmp_path, f"--screenshot={shot}", "--window-size=920,1100",
+                 page.as_uri())
+    pixels = np.asarray(Image.open(shot).convert("RGB")).astype(int)
+    r, g, b = pixels[..., 0], pixels[..., 1], pixels[..., 2]
+    # each layer's colour on the page (lines under a pixel wide: their hue, not full colour)
+    assert ((r - np.maximum(g, b)) > 60).sum() > 20              # the crank, red
+    assert ((b - np.maximum(r, g)) > 60).sum() > 1000            # the couplers, blue
+    assert ((g - np.maximum(r, b)) > 40).sum() > 150             # the rockers, green
+    assert (pixels.sum(axis=2) < 300).sum() > 2000               # the title block, black
+
+
+def test_the_trajectories_are_the_motion_over_a_turn(exported):
+    import pandas as pd
+
+    out, result = exported
+    table = pd.read_csv(out / "trajectories.csv")
+    assert len(table) == 360 and table["phi_deg"].iloc[1] == pytest.approx(1.0)
+    design = result["design"]
+    crank = np.hypot(table["A_x_mm"] - table["O_x_mm"], table["A_y_mm"] - table["O_y_mm"])
+    rocker = np.hypot(table["B3_x_mm"] - table["O3_x_mm"], table["B3_y_mm"] - table["O3_y_mm"])
+    assert np.allclose(crank, design["l1"], atol=1e-8)
+    assert np.allclose(rocker, design["l3"], atol=1e-8)
+    # ω_k is ω1·dθ_k/dφ: its integral over the turn is θ_k's change (none, it swings back)
+    w1 = 97.0
+    dtheta = np.gradient(np.unwrap(table["theta_1_rad"]), np.radians(1.0)) * w1
+    assert np.allclose(dtheta[2:-2], table["omega_1_rad_s"][2:-2], rtol=1e-3, atol=1e-2)
+    # the output envelope's samples never exceed the exact peak, and come within 0.1 % of it
+    peak = table["omega_out_rad_s"].max()
+    exact = result["quantities"]["values"]["peak_speed"]
+    assert exact * 0.999 < peak <= exact * (1 + 1e-12)
+    assert {f"epsilon_{k}_rad_s2" for k in range(1, 7)} <= set(table.columns)
+
+
+def test_a_format_not_known_is_exit_2(tmp_path, capsys):
+    assert main(["export", str(DISC), "--format", "dxf,step", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--format takes dxf, svg and csv" in err

@@ -30,6 +30,7 @@ COMMANDS = [
     "optdesign.commands.pareto",
     "optdesign.commands.tolerance",
     "optdesign.commands.export",
+    "optdesign.commands.animate",
     "optdesign.commands.schema",
 ]
 

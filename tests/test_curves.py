@@ -60,7 +60,7 @@ def test_cli_curves_writes_a_png(tmp_path, capsys, mechanism):
     png = tmp_path / "curves.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["curves.png"]   # no temp file left
-    assert capsys.readouterr().out.strip() == str(png)
+    assert capsys.readouterr().out.splitlines() == ["design: the file's design", str(png)]
 
 
 @pytest.mark.parametrize("args, message", [

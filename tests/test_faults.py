@@ -171,7 +171,7 @@ def test_two_runs_on_one_folder_one_refuses_and_a_killed_holder_blocks_nobody(
     finally:
         _kill(holder)
     assert main(["solve", str(b), "--out", str(out), "--no-plots"]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["result.json", "summary.txt"]
+    assert sorted(p.name for p in out.iterdir()) == ["design.yaml", "result.json", "summary.txt"]
     assert _litter(out) == []
 
 

@@ -12,10 +12,12 @@ from optdesign.outputs.atomic import (atomic_savefig, atomic_write_bytes, atomic
                                       atomic_write_text)
 
 #: every file ``solve`` may leave in its folder (the set :mod:`optdesign.outputs.folder` replaces)
-SOLVE_FILES = ("result.json", "summary.txt", "design.yaml", "speeds.png", "mechanism.png")
+SOLVE_FILES = ("result.json", "summary.txt", "design.yaml", "speeds.png", "mechanism.png",
+               "animation.html")
 #: every file ``pareto`` may leave in its folder (the set a fresh sweep clears)
 PARETO_FILES = ("points.jsonl", "pareto.csv", "pareto.json", "fronts.png", "lengths.png",
-                "knee_mechanism.png", "knee_speeds.png", "report.md", "report.html")
+                "knee_mechanism.png", "knee_speeds.png", "knee_animation.html", "report.md",
+                "report.html")
 
 
 def save_figure(fig, path: Path, **kwargs) -> Path:
@@ -31,7 +33,8 @@ def save_figure(fig, path: Path, **kwargs) -> Path:
 def write_solve(result, problem, out_dir: str | Path, plots: bool = True,
                 source_path=None) -> list[Path]:
     """result.json, summary.txt and (for a design) design.yaml (the problem file at
-    ``source_path`` with the design fixed), speeds.png and mechanism.png."""
+    ``source_path`` with the design fixed), speeds.png, mechanism.png and animation.html (the
+    optimum over one crank turn)."""
     from optdesign.commands.design_source import design_yaml
     from optdesign.evaluation.design import Design
     from optdesign.solver.outputs import summary_text
@@ -52,14 +55,17 @@ def write_solve(result, problem, out_dir: str | Path, plots: bool = True,
                               f"ratio = {result.ratio:.4f}"), out / "speeds.png"))
         written.append(save_figure(plot_mechanism(design, title=f"{problem.name}: optimum"),
                                    out / "mechanism.png"))
+        from optdesign.commands.animate import write_animation
+
+        written += write_animation(problem.with_design(**result.design), out)
     return written
 
 
 # --------------------------------------------------------------------------- pareto
 def write_report(result, problem, out_dir, problem_path=None,
                  command: str | None = None) -> list[Path]:
-    """fronts.png, lengths.png, knee_mechanism.png, knee_speeds.png, report.md and
-    report.html."""
+    """fronts.png, lengths.png, knee_mechanism.png, knee_speeds.png, knee_animation.html (the
+    knee over one crank turn), report.md and report.html."""
     from optdesign.evaluation.design import Design
     from optdesign.fronts.report import (blocks, plot_fronts, plot_lengths, render_html, render_md,
                                          run_info)
@@ -92,6 +98,10 @@ def write_report(result, problem, out_dir, problem_path=None,
             plot_speeds(design, problem.stroke, problem.input_speed,
                         title=f"knee design: δ = {knee['delta']:.4f}, "
                               f"ratio = {knee['ratio']:.4f}"), out / "knee_speeds.png")
+        from optdesign.commands.animate import write_animation
+
+        images["knee_animation.html"] = write_animation(
+            problem.with_design(**values), out, html_name="knee_animation.html")[0]
     items = blocks(result, problem, run_info(problem, result, problem_path, command), images)
     return list(images.values()) + [
         atomic_write_text(out / "report.md", render_md(items)),

@@ -241,6 +241,10 @@ def blocks(result, problem, info: dict, images: dict) -> list[tuple]:
              knee.get("ratio_multiplier") is not None else "") + "."))
         out.append(("img", "knee_mechanism.png", images.get("knee_mechanism.png")))
         out.append(("img", "knee_speeds.png", images.get("knee_speeds.png")))
+        if images.get("knee_animation.html") is not None:
+            out.append(("link", "knee_animation.html",
+                        "The knee design over one crank turn (an animation, its driving rocker "
+                        "highlighted)"))
     out.append(("h2", "Non-dominated designs (over every phase count)"))
     extra = [] if axis.is_ratio else [x]
     own = list(result.criteria_columns)
@@ -372,6 +376,8 @@ def render_md(items) -> str:
             lines += [item[1], ""]
         elif kind == "img" and item[2] is not None:
             lines += [f"![{item[1]}]({item[1]})", ""]
+        elif kind == "link":
+            lines += [f"[{item[2]}]({item[1]})", ""]
         elif kind == "table":
             head, rows = item[1], item[2]
             lines.append("| " + " | ".join(head) + " |")
@@ -390,6 +396,8 @@ def render_html(items) -> str:
         elif kind == "img" and item[2] is not None:
             data = base64.b64encode(Path(item[2]).read_bytes()).decode("ascii")
             body.append(f'<img alt="{html.escape(item[1])}" src="data:image/png;base64,{data}">')
+        elif kind == "link":
+            body.append(f'<p><a href="{html.escape(item[1])}">{html.escape(item[2])}</a></p>')
         elif kind == "table":
             head = "".join(f"<th>{html.escape(str(h))}</th>" for h in item[1])
             rows = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r)

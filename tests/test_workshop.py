@@ -1,5 +1,6 @@
-"""``optdesign export``: the solved linkage to scale as DXF (read back here with ezdxf), the same
-drawing as SVG (rendered in headless Chromium), and its trajectories as CSV."""
+"""From optimum to workshop: ``solve``, then ``export`` (the linkage to scale as DXF, read back
+here with ezdxf; the same drawing as SVG, rendered in headless Chromium; its trajectories as CSV)
+and ``animate`` (a self-contained HTML page, rendered in Chromium, and a GIF) on its design."""
 import math
 
 import numpy as np
@@ -107,3 +108,67 @@ def test_a_format_not_known_is_exit_2(tmp_path, capsys):
     assert main(["export", str(DISC), "--format", "dxf,step", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--format takes dxf, svg and csv" in err
+
+
+# --------------------------------------------------------------------------- animate
+@pytest.fixture(scope="module")
+def animated(exported):
+    out, result = exported
+    solved = out.parent / "solved"
+    code, text = run_main(["animate", DISC, "--design", solved / "result.json",
+                           "--out", out.parent / "animated"])
+    assert code == 0 and text.startswith(f"design: the optimum of {solved / 'result.json'}")
+    return out.parent / "animated", result
+
+
+def _page_data(html: str) -> dict:
+    import json
+
+    start = html.index("const D = ") + len("const D = ")
+    return json.loads(html[start:html.index(";\n", start)])
+
+
+def test_the_page_is_self_contained_and_its_data_is_the_turn(animated):
+    out, result = animated
+    html = (out / "animation.html").read_text()
+    for outside in ("<script src", "<link", "src=\"http", "href=\"http", "@import", "url("):
+        assert outside not in html
+    data = _page_data(html)
+    assert len(data["phi"]) == 120 and len(data["positions"]) == 120
+    speeds, output = np.array(data["speeds"]), np.array(data["output"])
+    # the highlighted member is the one whose driving speed is the output's, frame by frame
+    assert np.allclose(speeds[data["driving"], np.arange(120)], output, atol=1e-4)
+    assert 0.99 * result["quantities"]["values"]["peak_speed"] < output.max() <= \
+        result["quantities"]["values"]["peak_speed"] * (1 + 1e-5)
+    assert sorted({m for *_, m in data["links"] if m is not None}) == list(range(6))
+
+
+def test_chromium_turns_the_crank(animated, chromium, tmp_path):
+    import re
+
+    from PIL import Image
+
+    out, _ = animated
+    page = (out / "animation.html").as_uri()
+    dom = chromium_run(chromium, tmp_path, "--virtual-time-budget=1500", "--dump-dom", page)
+    assert int(re.search(r'data-frames-shown="(\d+)"', dom).group(1)) >= 1
+    assert re.search(r"crank angle [\d.]+° · member \d drives · output [\d.]+ rad/s", dom)
+    shot = tmp_path / "animation.png"
+    chromium_run(chromium, tmp_path, "--virtual-time-budget=1500", f"--screenshot={shot}",
+                 "--window-size=1200,760", page)
+    pixels = np.asarray(Image.open(shot).convert("RGB")).astype(int)
+    r, g, b = pixels[..., 0], pixels[..., 1], pixels[..., 2]
+    assert ((b - np.maximum(r, g)) > 80).sum() > 1000                       # couplers
+    assert ((r > 200) & (g > 100) & (g < 170) & (b < 60)).sum() > 30        # driving, orange
+    assert (pixels.sum(axis=2) < 150).sum() > 1000                          # the envelope
+
+
+def test_the_gif_turns_the_crank_once(animated):
+    from PIL import Image
+
+    out, _ = animated
+    gif = Image.open(out / "animation.gif")
+    assert gif.format == "GIF" and gif.n_frames == 60 and gif.size[0] >= 600
+    first = np.asarray(gif.convert("RGB")).copy()
+    gif.seek(30)
+    assert np.abs(np.asarray(gif.convert("RGB")).astype(int) - first).sum() > 0

@@ -1,0 +1,84 @@
+"""``optdesign animate PROBLEM.yaml [--design FILE [--point K | --knee]] [--eccentricity E]
+[--frames N] [--out DIR]``: the linkage over one crank turn.
+
+Writes ``animation.html`` (self-contained: SVG and a script, nothing beside it),
+``animation.gif`` and, when ffmpeg is on the PATH, ``animation.mp4``, each atomically, into DIR
+(default results/NAME/): the rocker driving the output highlighted, the output speed traced
+beside it (:mod:`optdesign.export.animation`). Exit 0; 1 when the design does not assemble;
+2 for bad input.
+"""
+from __future__ import annotations
+
+from optdesign.commands.design_source import add_arguments, chosen_design
+
+#: most frames of --frames
+MAX_FRAMES = 720
+#: most frames of the GIF and the MP4 (a turn in 5 s): each is drawn by matplotlib
+MOVIE_FRAMES = 60
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("animate", help="the linkage over one crank turn as a self-contained "
+                                       "HTML page and a GIF (an MP4 with ffmpeg)")
+    p.add_argument("problem", help="problem file (YAML)")
+    add_arguments(p)
+    p.add_argument("--eccentricity", type=float, default=1.0,
+                   help="fraction e of the regulating length (default 1)")
+    p.add_argument("--frames", type=int, default=120, help="frames of the turn (default 120)")
+    p.add_argument("--out", help="output directory (default results/NAME/)")
+    p.set_defaults(run=run)
+
+
+def run(args) -> int:
+    import shutil
+
+    from optdesign.errors import UsageError
+    from optdesign.outputs.checks import prepare_out
+    from optdesign.problem.loader import MIN_ECCENTRICITY, load_problem
+
+    problem = load_problem(args.problem)
+    chosen = chosen_design(args, problem)
+    problem = chosen.problem(problem)
+    if not MIN_ECCENTRICITY <= args.eccentricity <= 1:
+        raise UsageError(f"--eccentricity must lie in [{MIN_ECCENTRICITY:g}, 1] (got "
+                         f"{args.eccentricity:g})")
+    if not 8 <= args.frames <= MAX_FRAMES:
+        raise UsageError(f"--frames must lie in [8, {MAX_FRAMES}] (got {args.frames})")
+    names = ["animation.html", "animation.gif"] + (["animation.mp4"] if shutil.which("ffmpeg")
+                                                   else [])
+    out = prepare_out(args.out, problem.name, files=tuple(names))
+    written = write_animation(problem, out, args.eccentricity, args.frames,
+                              movies=tuple(n for n in names if not n.endswith(".html")))
+    print(f"design: {chosen.source}")
+    print(f"wrote {', '.join(str(p) for p in written)}")
+    return 0
+
+
+def write_animation(problem, out, eccentricity: float = 1.0, frames: int = 120,
+                    movies: tuple[str, ...] = (), html_name: str = "animation.html") -> list:
+    """``html_name`` (and each of ``movies``: GIF or MP4 file names) of the problem's design in
+    ``out``; what was written. AssemblyError (exit 1) when the design does not assemble."""
+    import tempfile
+    from pathlib import Path
+
+    from optdesign.evaluation.design import Design
+    from optdesign.evaluation.figures import evaluate
+    from optdesign.export.animation import html_page, movie, turn, turn_title
+    from optdesign.outputs.atomic import atomic_write_bytes, atomic_write_text
+
+    design = Design.from_problem(problem)
+    design.check_assembly(eccentricity)
+    ev = evaluate(design, problem.stroke, problem.input_speed, (eccentricity,))
+    if ev.failure is not None:
+        raise ev.failure
+    title = turn_title(problem, design, ev.per_e[0].figures[problem.stroke])
+    data = turn(design, problem.stroke, problem.input_speed, eccentricity, frames)
+    written = [atomic_write_text(Path(out) / html_name, html_page(data, title))]
+    if movies and frames > MOVIE_FRAMES:      # a movie's frames are drawn one by one: fewer
+        data = turn(design, problem.stroke, problem.input_speed, eccentricity, MOVIE_FRAMES)
+    for name in movies:
+        with tempfile.TemporaryDirectory() as scratch:
+            path = Path(scratch) / name
+            movie(data, title, path, fps=max(8, round(len(data.phi_deg) / 5)))
+            written.append(atomic_write_bytes(Path(out) / name, path.read_bytes()))
+    return written

@@ -1,0 +1,254 @@
+"""The linkage over one crank turn: a self-contained HTML page and a GIF.
+
+Each frame is the linkage at one crank angle (:func:`~optdesign.figures.design.linkage`), the
+rocker that drives the output there highlighted: the member whose driving speed s·dθ_k/dφ is
+the envelope's (Sharkov & Kalinin 2022, eqs. 5-8), beside the output speed over the turn with
+the frame's angle marked. The HTML page holds its data and its script inline (no file or
+network beside it) and draws with SVG; the GIF is drawn by matplotlib (Pillow's writer), and an
+MP4 with it when ffmpeg is on the PATH.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+
+import numpy as np
+
+from optdesign.envelope.sampled import STROKE_SIGNS, driving_speeds
+from optdesign.figures.design import linkage
+
+#: frames of one crank turn
+FRAMES = 120
+#: colours of the roles (those of the DXF's layers), and the driving rocker's
+COLOURS = {"frame": "#8c8c8c", "crank": "#d62728", "coupler": "#1f4fd6",
+           "rocker": "#2a8a2a", "driving": "#ff7f0e"}
+
+
+@dataclass(frozen=True)
+class Turn:
+    """What every frame shows: joint positions, the links and their roles, the member each
+    rocker link is, which member drives at each frame, and the speeds."""
+
+    names: tuple[str, ...]
+    positions: np.ndarray            # (frames, joints, 2), mm
+    links: tuple                     # ((a, b, role, member or None), ...)
+    phi_deg: np.ndarray              # (frames,)
+    driving: np.ndarray              # (frames,) member index driving the output
+    speeds: np.ndarray               # (members, frames) driving speed s·ω_k, rad/s (best sign)
+    output: np.ndarray               # (frames,) output speed, rad/s
+
+    def to_dict(self) -> dict:
+        return {"names": list(self.names),
+                "positions": np.round(self.positions, 4).tolist(),
+                "links": [list(link) for link in self.links],
+                "phi": np.round(self.phi_deg, 4).tolist(),
+                "driving": self.driving.tolist(),
+                "speeds": np.round(self.speeds, 5).tolist(),
+                "output": np.round(self.output, 5).tolist()}
+
+
+def turn(design, stroke: str, input_speed: float, eccentricity: float = 1.0,
+         frames: int = FRAMES) -> Turn:
+    """The :class:`Turn` of ``design`` over ``frames`` crank angles."""
+    drawn = linkage(design, eccentricity, frames)
+    phi = np.linspace(0.0, 2 * np.pi, frames, endpoint=False)
+    kin = design.sample(phi, eccentricity)
+    count = kin["dtheta"].shape[0]
+    curves = driving_speeds(kin["dtheta"], stroke) * input_speed        # (signs·members, N)
+    best = curves.argmax(axis=0)
+    output = np.maximum(curves.max(axis=0), 0.0)
+    per_member = curves.reshape(len(STROKE_SIGNS[stroke]), count, frames).max(axis=0)
+    members = _rocker_members(drawn, kin["theta"])
+    links = tuple((a, b, role, members.get((a, b))) for (a, b), role in drawn.roles.items())
+    positions = drawn.turn.transpose(0, 2, 1)                           # (frames, joints, 2)
+    return Turn(drawn.names, positions, links, np.degrees(phi), best % count, per_member,
+                output)
+
+
+def _rocker_members(drawn, theta: np.ndarray) -> dict:
+    """Rocker link -> the output member whose angle θ_k it turns with (the least spread of
+    their wrapped difference over the turn)."""
+    out = {}
+    for (a, b), role in drawn.roles.items():
+        if role != "rocker":
+            continue
+        pivot, end = (a, b) if a in drawn.fixed else (b, a)
+        v = drawn.path(end) - drawn.path(pivot)
+        angle = np.arctan2(v[:, 1], v[:, 0])
+        spread = [np.abs(np.angle(np.exp(1j * (angle - t)) /
+                                  np.mean(np.exp(1j * (angle - t))))).max() for t in theta]
+        out[(a, b)] = int(np.argmin(spread))
+    return out
+
+
+# --------------------------------------------------------------------------- HTML
+def html_page(data: Turn, title: str) -> str:
+    """The self-contained page: an SVG of the linkage and one of the speeds, a script that
+    turns the crank, a button to pause."""
+    low = data.positions.reshape(-1, 2).min(axis=0)
+    high = data.positions.reshape(-1, 2).max(axis=0)
+    pad = 0.06 * float(max(high - low))
+    box = [float(low[0] - pad), float(-high[1] - pad), float(high[0] - low[0] + 2 * pad),
+           float(high[1] - low[1] + 2 * pad)]
+    top = float(max(data.speeds.max(), data.output.max())) * 1.08 or 1.0
+    payload = json.dumps(data.to_dict() | {"colours": COLOURS, "top": top,
+                                           "width": box[2]}, separators=(",", ":"))
+    return _PAGE.replace("__TITLE__", _escape(title)).replace(
+        "__VIEWBOX__", " ".join(f"{x:.4f}" for x in box)).replace("__DATA__", payload)
+
+
+def _escape(text: str) -> str:
+    return (text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+            .replace('"', "&quot;"))
+
+
+_PAGE = """<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>__TITLE__</title>
+<style>
+body{font-family:system-ui,sans-serif;margin:16px;color:#222;background:#fff}
+.row{display:flex;flex-wrap:wrap;gap:16px;align-items:flex-start}
+svg{border:1px solid #ddd;background:#fff}
+#state{font-variant-numeric:tabular-nums;margin:8px 0}
+button{font-size:14px;padding:4px 12px}
+.key span{display:inline-block;width:18px;height:4px;margin:0 4px 3px 12px}
+</style></head><body>
+<h2>__TITLE__</h2>
+<div class="key"><span style="background:#d62728"></span>crank<span
+style="background:#1f4fd6"></span>couplers<span style="background:#2a8a2a"></span>rockers<span
+style="background:#ff7f0e"></span>the rocker driving the output<span
+style="background:#8c8c8c"></span>frame</div>
+<div id="state">&nbsp;</div>
+<button id="toggle">pause</button>
+<div class="row">
+<svg id="linkage" width="560" height="560" viewBox="__VIEWBOX__"></svg>
+<svg id="speeds" width="560" height="300" viewBox="0 0 560 300"></svg>
+</div>
+<script>
+const D = __DATA__;
+const NS = "http://www.w3.org/2000/svg";
+const L = document.getElementById("linkage"), S = document.getElementById("speeds");
+const idx = {}; D.names.forEach((n, i) => idx[n] = i);
+const w = D.width / 280;
+function el(parent, tag, attrs) {
+  const e = document.createElementNS(NS, tag);
+  for (const k in attrs) e.setAttribute(k, attrs[k]);
+  parent.appendChild(e); return e;
+}
+const lines = D.links.map(([a, b, role]) => el(L, "line", {stroke: D.colours[role],
+  "stroke-width": w * (role === "coupler" ? 1.2 : 2), "stroke-linecap": "round"}));
+const dots = D.names.map(() => el(L, "circle", {r: w * 2.2, fill: "#fff", stroke: "#333",
+  "stroke-width": w * 0.6}));
+const x0 = 48, x1 = 548, y0 = 262, y1 = 24;
+const sx = p => x0 + (x1 - x0) * p / 360, sy = v => y0 - (y0 - y1) * Math.max(v, 0) / D.top;
+el(S, "line", {x1: x0, y1: y0, x2: x1, y2: y0, stroke: "#999"});
+el(S, "line", {x1: x0, y1: y0, x2: x0, y2: y1, stroke: "#999"});
+[0, 90, 180, 270, 360].forEach(p => { const t = el(S, "text", {x: sx(p), y: y0 + 16,
+  "font-size": 11, "text-anchor": "middle"}); t.textContent = p + "\u00b0"; });
+const yl = el(S, "text", {x: x1, y: 12, "font-size": 11, "text-anchor": "end"});
+yl.textContent = "output speed (black) and each member's driving speed, rad/s";
+const xl = el(S, "text", {x: (x0 + x1) / 2, y: y0 + 29, "font-size": 11,
+  "text-anchor": "middle"}); xl.textContent = "crank angle";
+const ticks = [0, D.top / 2, D.top];
+ticks.forEach(v => { const t = el(S, "text", {x: x0 - 4, y: sy(v) + 4, "font-size": 10,
+  "text-anchor": "end"}); t.textContent = v.toFixed(1); });
+const path = ys => ys.map((v, i) => sx(D.phi[i]) + "," + sy(v)).join(" ");
+D.speeds.forEach(ys => el(S, "polyline", {points: path(ys), fill: "none",
+  stroke: "#2a8a2a", "stroke-opacity": 0.35, "stroke-width": 1}));
+el(S, "polyline", {points: path(D.output), fill: "none", stroke: "#111", "stroke-width": 2.2});
+const cursor = el(S, "line", {y1: y0, y2: y1, stroke: "#ff7f0e", "stroke-width": 1.5});
+const mark = el(S, "circle", {r: 4, fill: "#ff7f0e"});
+const state = document.getElementById("state");
+let frame = 0, running = true, shown = 0;
+function draw(f) {
+  const P = D.positions[f];
+  D.links.forEach(([a, b, role, member], i) => {
+    const p = P[idx[a]], q = P[idx[b]], ln = lines[i];
+    ln.setAttribute("x1", p[0]); ln.setAttribute("y1", -p[1]);
+    ln.setAttribute("x2", q[0]); ln.setAttribute("y2", -q[1]);
+    const drives = role === "rocker" && member === D.driving[f];
+    ln.setAttribute("stroke", drives ? D.colours.driving : D.colours[role]);
+    ln.setAttribute("stroke-width", w * (drives ? 3.4 : role === "coupler" ? 1.2 : 2));
+  });
+  D.names.forEach((n, i) => { dots[i].setAttribute("cx", P[i][0]);
+    dots[i].setAttribute("cy", -P[i][1]); });
+  cursor.setAttribute("x1", sx(D.phi[f])); cursor.setAttribute("x2", sx(D.phi[f]));
+  mark.setAttribute("cx", sx(D.phi[f])); mark.setAttribute("cy", sy(D.output[f]));
+  state.textContent = "crank angle " + D.phi[f].toFixed(1) + "\u00b0 \u00b7 member " +
+    (D.driving[f] + 1) + " drives \u00b7 output " + D.output[f].toFixed(3) + " rad/s";
+  document.body.setAttribute("data-frames-shown", ++shown);
+}
+document.getElementById("toggle").onclick = function () {
+  running = !running; this.textContent = running ? "pause" : "play"; };
+let last = 0;
+function tick(t) {
+  if (running && t - last > 1000 / 24) { draw(frame); frame = (frame + 1) % D.phi.length;
+    last = t; }
+  requestAnimationFrame(tick);
+}
+draw(0); requestAnimationFrame(tick);
+</script></body></html>
+"""
+
+
+# --------------------------------------------------------------------------- GIF / MP4
+def movie(data: Turn, title: str, path, fps: int = 24) -> None:
+    """The turn as a GIF (``path`` ending .gif) or an MP4 (.mp4, needs ffmpeg), drawn by
+    matplotlib: the linkage on the left, the speeds on the right."""
+    import matplotlib
+    from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
+
+    from optdesign.figures.design import pyplot
+
+    plt = pyplot()
+    with matplotlib.rc_context({"figure.dpi": 80}):
+        fig, (ax, bx) = plt.subplots(1, 2, figsize=(10, 4.6),
+                                     gridspec_kw={"width_ratios": [1, 1.25]})
+    low = data.positions.reshape(-1, 2).min(axis=0)
+    high = data.positions.reshape(-1, 2).max(axis=0)
+    pad = 0.05 * float(max(high - low))
+    ax.set_xlim(low[0] - pad, high[0] + pad)
+    ax.set_ylim(low[1] - pad, high[1] + pad)
+    ax.set_aspect("equal")
+    ax.set_axis_off()
+    drawn = [ax.plot([], [], color=COLOURS[role], lw=1.2 if role == "coupler" else 2.2,
+                     solid_capstyle="round")[0] for _, _, role, _ in data.links]
+    joints = ax.plot([], [], "o", ms=3, mfc="white", mec="0.2")[0]
+    for ys in data.speeds:
+        bx.plot(data.phi_deg, ys, color=COLOURS["rocker"], alpha=0.35, lw=0.9)
+    bx.plot(data.phi_deg, data.output, color="black", lw=2)
+    top = float(max(data.speeds.max(), data.output.max())) * 1.08 or 1.0
+    bx.set_ylim(0, top)
+    bx.set_xlim(0, 360)
+    bx.set_xticks(range(0, 361, 90))
+    bx.set_xlabel("crank angle φ1 [deg]")
+    bx.set_ylabel("speed [rad/s]")
+    bx.grid(alpha=0.3)
+    cursor = bx.axvline(0, color=COLOURS["driving"], lw=1.2)
+    mark = bx.plot([], [], "o", color=COLOURS["driving"], ms=5)[0]
+    fig.suptitle(title, fontsize=10)
+    index = {n: i for i, n in enumerate(data.names)}
+
+    def frame(f):
+        P = data.positions[f]
+        for line, (a, b, role, member) in zip(drawn, data.links):
+            p, q = P[index[a]], P[index[b]]
+            line.set_data([p[0], q[0]], [p[1], q[1]])
+            drives = role == "rocker" and member == data.driving[f]
+            line.set_color(COLOURS["driving"] if drives else COLOURS[role])
+            line.set_linewidth(3.6 if drives else 1.2 if role == "coupler" else 2.2)
+        joints.set_data(P[:, 0], P[:, 1])
+        cursor.set_xdata([data.phi_deg[f]] * 2)
+        mark.set_data([data.phi_deg[f]], [data.output[f]])
+        return [*drawn, joints, cursor, mark]
+
+    animation = FuncAnimation(fig, frame, frames=len(data.phi_deg), blit=False)
+    writer = PillowWriter(fps=fps) if str(path).endswith(".gif") else FFMpegWriter(fps=fps)
+    animation.save(str(path), writer=writer)
+    plt.close(fig)
+
+
+def turn_title(problem, design, figures) -> str:
+    """The page's and the movie's title: the name, the count and the exact δ and ratio."""
+    count = problem.model.count_variable
+    return (f"{problem.name}: {problem.mechanism}, {count} = {design.count}, "
+            f"δ = {figures.delta:.4f}, ratio = {figures.ratio:.4f}")

@@ -31,6 +31,7 @@ COMMANDS = [
     "optdesign.commands.tolerance",
     "optdesign.commands.export",
     "optdesign.commands.animate",
+    "optdesign.commands.compare",
     "optdesign.commands.schema",
 ]
 

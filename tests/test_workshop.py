@@ -172,3 +172,46 @@ def test_the_gif_turns_the_crank_once(animated):
     first = np.asarray(gif.convert("RGB")).copy()
     gif.seek(30)
     assert np.abs(np.asarray(gif.convert("RGB")).astype(int) - first).sum() > 0
+
+
+# --------------------------------------------------------------------------- compare, and all
+def test_compare_puts_the_optimum_beside_the_initial_design(exported, tmp_path):
+    import json
+
+    out, result = exported
+    solved = out.parent / "solved"
+    code, text = run_main(["compare", solved / "result.json", solved / "design.yaml", DISC,
+                           "--json", "--out", tmp_path])
+    doc = json.loads(text)
+    assert code == 0 and [r["label"] for r in doc["designs"]] == [
+        str(solved / "result.json"), str(solved / "design.yaml"), str(DISC)]
+    optimum, fixed, initial = doc["designs"]
+    assert optimum["delta"] == result["delta"] and fixed["delta"] == result["delta"]
+    assert optimum["housing_radius"] == result["quantities"]["values"]["housing_radius"]
+    assert initial["l3"] == 56.0 and initial["delta"] > result["delta"]
+    assert doc["units"]["l3"] == "mm" and doc["units"]["housing_radius"] == "mm"
+    assert (tmp_path / "compare.png").stat().st_size > 20_000
+    assert (tmp_path / "compare.csv").read_text().startswith("label,")
+
+
+def test_one_design_through_every_command(exported, tmp_path):
+    """The issue's path from a fresh clone: solve the disc problem, then export, animate,
+    simulate and compare on its design.yaml and result.json (export and animate above)."""
+    import json
+
+    out, result = exported
+    solved = out.parent / "solved"
+    dynamics = ROOT / "problems" / "sharkov2022_dynamics.yaml"
+    code, text = run_main(["simulate", dynamics, "--design", solved / "design.yaml", "--json",
+                           "--out", tmp_path / "simulated"])
+    simulated = json.loads(text)
+    assert code == 0 and simulated["delta_kinematic"] == pytest.approx(result["delta"],
+                                                                       rel=1e-6)
+    assert simulated["design_source"] == f"the design of {solved / 'design.yaml'}"
+    code, _ = run_main(["compare", solved / "design.yaml", solved / "result.json",
+                        "--out", tmp_path / "compared"])
+    assert code == 0
+    assert {p.name for p in out.iterdir()} == {"linkage.dxf", "linkage.svg",
+                                               "trajectories.csv"}
+    assert {p.name for p in (out.parent / "animated").iterdir()} >= {"animation.html",
+                                                                    "animation.gif"}

@@ -450,3 +450,20 @@ def plot_regulation(curve: dict, worst: dict | None = None, title: str | None = 
     ax_d.set_title(title or "ripple and ratio against the eccentricity")
     fig.tight_layout()
     return fig
+
+
+def plot_envelopes(curves: dict, ax=None, title: str | None = None):
+    """The output speed over the crank angle of several designs, overlaid: ``curves`` maps a
+    label to (crank angle [deg], output speed [rad/s])."""
+    plt = pyplot()
+    fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(figsize=(9, 4.8))
+    for label, (deg, speed) in curves.items():
+        ax.plot(deg, speed, lw=1.8, label=label)
+    ax.set_xlim(0, 360)
+    ax.set_xticks(range(0, 361, 45))
+    ax.set_xlabel("crank angle φ1 [deg]")
+    ax.set_ylabel("output speed [rad/s]")
+    ax.set_title(title or "output speed over one crank turn")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), frameon=False)
+    return fig

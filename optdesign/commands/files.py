@@ -110,10 +110,11 @@ def write_report(result, problem, out_dir, problem_path=None,
 
 # --------------------------------------------------------------------------- simulate
 def write_simulation(result, out: Path) -> list[Path]:
-    """dynamics.json, the steady cycle as CSV and the two figures."""
+    """dynamics.json, the steady cycle as CSV and the three figures (angles, speeds,
+    loads)."""
     import numpy as np
 
-    from optdesign.dynamics.plots import plot_angles, plot_speeds
+    from optdesign.dynamics.plots import plot_angles, plot_loads, plot_speeds
 
     written = [atomic_write_json(out / "dynamics.json", result.to_dict())]
     tr = result.trace
@@ -125,7 +126,8 @@ def write_simulation(result, out: Path) -> list[Path]:
     lines = [",".join(cols)] + [",".join(f"{v:.10g}" for v in row) for row in rows]
     written.append(atomic_write_text(out / "dynamics_cycle.csv", "\n".join(lines) + "\n"))
     for name, plot in (("dynamics_angles.png", plot_angles),
-                       ("dynamics_speeds.png", plot_speeds)):
+                       ("dynamics_speeds.png", plot_speeds),
+                       ("dynamics_loads.png", plot_loads)):
         written.append(save_figure(plot(result), out / name, dpi=120))
     return written
 

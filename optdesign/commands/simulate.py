@@ -2,8 +2,9 @@
 --knee]]``: the drive's steady cycle.
 
 Needs a ``dynamics:`` section (:mod:`optdesign.dynamics.section`). Writes DIR/dynamics.json,
-DIR/dynamics_cycle.csv and the figures DIR/dynamics_angles.png (the paper's Fig. 2) and
-DIR/dynamics_speeds.png (Fig. 3), all atomically; default DIR is results/NAME/. Exit 0 when the
+DIR/dynamics_cycle.csv and the figures DIR/dynamics_angles.png (the paper's Fig. 2),
+DIR/dynamics_speeds.png (Fig. 3) and DIR/dynamics_loads.png (freewheel torques, joint forces),
+all atomically; default DIR is results/NAME/. Exit 0 when the
 cycle repeated; 1 when ``cycles`` ran out first, the output stalls or the integration fails,
 with the reason in one line on stderr and in the JSON's ``reason`` (the last turn is still
 reported and written; a failed integration writes dynamics.json alone).
@@ -53,7 +54,8 @@ def run(args) -> int:
     if overrides.get("cycles", 1) > MAX_CYCLES:
         raise UsageError(f"--cycles must be at most {MAX_CYCLES} (got {overrides['cycles']})")
     out = prepare_out(args.out, problem.name, files=(
-        "dynamics.json", "dynamics_cycle.csv", "dynamics_angles.png", "dynamics_speeds.png"))
+        "dynamics.json", "dynamics_cycle.csv", "dynamics_angles.png", "dynamics_speeds.png",
+        "dynamics_loads.png"))
     section = replace(section, **overrides)
     from tqdm import tqdm
     try:                # turns until the cycle repeats: the bar ends early when it does
@@ -69,7 +71,7 @@ def run(args) -> int:
         print(f"design: {chosen.source}")
         print(format_result(result))
         print(f"wrote {out}/dynamics.json, dynamics_cycle.csv, dynamics_angles.png, "
-              f"dynamics_speeds.png")
+              f"dynamics_speeds.png, dynamics_loads.png")
     if result.steady:
         return 0
     print(f"optdesign: {problem.source}: {result.reason}", file=sys.stderr)
@@ -124,4 +126,26 @@ def format_result(r) -> str:
         f"{ms(first.get('t0_s'))}, t1 {ms(first.get('t1_s'))}, t2 {ms(first.get('t2_s'))}, "
         f"t3 {ms(first.get('t3_s'))}, ε max {first.get('eps_max') or 0:.5g} rad",
     ]
-    return "\n".join(lines)
+    return "\n".join(lines + load_lines(r.loads))
+
+
+def load_lines(loads: dict) -> list[str]:
+    """The loads of the steady cycle: each freewheel's peak torque and engagement share,
+    the crank's peak torque, each joint's peak force."""
+    if not loads:
+        return []
+    wheels = loads["freewheels"]
+    engaged = [w for w in wheels if w["engaged_share"] > 0]
+    lines = [f"  freewheels       {len(engaged)} of {len(wheels)} engage over the cycle; mean "
+             f"total torque {loads['mean_freewheel_torque_n_m']:.4g} N·m; crank's peak "
+             f"{loads['peak_crank_torque_n_m']:.4g} N·m"]
+    lines += [f"    {w['freewheel']:>4}  peak {w['peak_torque_n_m']:9.4g} N·m at φ = "
+              f"{w['peak_at_phi_deg']:6.1f}°, engaged {100 * w['engaged_share']:5.1f} % of the "
+              f"cycle" for w in wheels]
+    if loads.get("joints"):
+        lines.append("  joint forces     peak over the cycle, links massless:")
+        lines += [f"    {j['joint']:>4}  {j['kind']:<5} {j['peak_force_n']:10.5g} N at φ = "
+                  f"{j['peak_at_phi_deg']:6.1f}°" for j in loads["joints"]]
+    elif loads.get("joints_note"):
+        lines.append(f"  joint forces     none: {loads['joints_note']}")
+    return lines

@@ -95,3 +95,36 @@ def plot_speeds(result, ax=None):
                  f"{result.dynamic.delta:.3f} dynamic, {result.kinematic.delta:.3f} kinematic",
                  fontsize=10)
     return fig
+
+
+def plot_loads(result):
+    """What sizes the parts over the steady cycle: each freewheel's torque against time, and
+    the peak force of every joint (links massless), pivots and pins apart."""
+    plt = pyplot()
+    joints = (result.loads or {}).get("joints") or []
+    fig, axes = plt.subplots(1, 2 if joints else 1, figsize=(12 if joints else 7.5, 4.2),
+                             squeeze=False)
+    ax = axes[0, 0]
+    tr = result.trace
+    for k, label in enumerate(result.labels):
+        torque = tr["freewheel_torque"][k]
+        if np.any(torque > 0):
+            ax.plot(tr["t"], torque, lw=1.2, label=f"freewheel {label}")
+    ax.axhline(result.loads["mean_freewheel_torque_n_m"], color="k", lw=0.8, ls=":",
+               label="mean of their sum")
+    ax.set_xlabel("t, s")
+    ax.set_ylabel("freewheel torque λ·ε, N·m")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(f"{result.name}: freewheel torques over {_which(result)}", fontsize=10)
+    if joints:
+        bx = axes[0, 1]
+        names = [j["joint"] for j in joints]
+        colours = ["0.45" if j["kind"] == "pivot" else "tab:blue" for j in joints]
+        bx.bar(names, [j["peak_force_n"] for j in joints], color=colours)
+        bx.set_ylabel("peak force, N")
+        bx.set_title("peak joint forces (grey: pivots, blue: pins)", fontsize=10)
+        bx.tick_params(axis="x", labelsize=8, rotation=90)
+        bx.grid(alpha=0.3, axis="y")
+    fig.tight_layout()
+    return fig

@@ -52,6 +52,9 @@ class SimulationResult:
     switches: list
     labels: list
     trace: dict = field(repr=False, default_factory=dict)
+    #: the freewheels' torques and the joints' forces over the cycle
+    #: (:func:`optdesign.dynamics.loads.loads`)
+    loads: dict = field(default_factory=dict)
 
     @property
     def steady(self) -> bool:
@@ -97,6 +100,7 @@ class SimulationResult:
             "model": {"freewheel": self.freewheel, "crank": self.crank, "method": self.method,
                       "rtol": self.rtol, "atol": self.atol},
             "counters": self.counters, "wall_time_s": self.wall_time_s,
+            "loads": self.loads,
         })
 
 

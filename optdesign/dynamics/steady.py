@@ -27,6 +27,7 @@ import numpy as np
 
 from optdesign.dynamics.instants import first_turn_instants, steady_instants
 from optdesign.dynamics.integrator import Integrator, Trace
+from optdesign.dynamics.loads import loads
 from optdesign.dynamics.model import DriveModel, Mode, TWO_PI
 from optdesign.dynamics.result import SimulationResult
 from optdesign.dynamics.section import DynamicsSection
@@ -72,7 +73,11 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
         progress()
     wall = time.perf_counter() - clock
     kinematic, _ = exact_figures(design, problem.stroke, problem.input_speed)
-    return _result(problem, section, method, model, integ, approach, cycle, kinematic, wall)
+    result = _result(problem, section, method, model, integ, approach, cycle, kinematic, wall)
+    result.loads, series = loads(design, model, result.trace, section.reduction,
+                                 result.switches)
+    result.trace |= series
+    return result
 
 
 @dataclass

@@ -199,6 +199,14 @@ class Mechanism(ABC):
         """:meth:`kinematics` mapped over ``n_points`` crank angles (built once, then reused)."""
         return self.kinematics(count, options).map(n_points)
 
+    def joint_forces(self, joints: dict, torques: np.ndarray) -> dict | None:
+        """The forces in the joints (N) when each output member k delivers the torque
+        ``torques[k]`` (N·m, per sample) to its freewheel, the links massless (a quasi-static
+        analysis at each sample): ``{joint: force magnitude per sample}`` from the positions
+        ``joints`` (mm, ``{name: (2, samples)}``); None where the mechanism has no such
+        analysis."""
+        return None
+
     @lru_cache(maxsize=64)
     def joints(self, count: int, options: tuple[tuple[str, str], ...] = ()):
         """``casadi.Function`` (phi, p) -> 2×J joint positions, and the names and links."""

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 
 import casadi as ca
+import numpy as np
 
 from optdesign.declarations import Key
 from optdesign.errors import ProblemError
@@ -95,6 +96,37 @@ class FourBarConverter(Mechanism):
             default=False),
     )
 
+    def joint_forces(self, joints, torques):
+        """Forces in the joints of the converter, the links massless, when rocker k delivers
+        ``torques[k]`` to its freewheel (per sample). The rods C_iB_i (i >= 2) are two-force
+        members: the force along the rod, f_i, balances rocker i about O_i, f_i =
+        -M_i / ((B_i - O_i) x e_i), e_i the rod's unit vector from C_i to B_i; it is the force
+        at B_i, C_i and O_i. The disc (A, B_1, C_i) takes the pin force P at B_1 from rocker
+        1 (M_1 = (B_1 - O_1) x P) and the rods' forces, and is balanced about A by P; the
+        crank pin A carries Q = P - Σ f_i·e_i, as does the crank's pivot O. Lengths in mm are
+        turned to m, so forces are in N."""
+        pos = {k: np.asarray(v, dtype=float) / 1000.0 for k, v in joints.items()}
+        torques = np.atleast_2d(np.asarray(torques, dtype=float))
+        count = torques.shape[0]
+        out, rods = {}, np.zeros_like(pos["A"])
+        moment_of_rods = np.zeros(pos["A"].shape[1])
+        for i in range(2, count + 1):
+            b, c, o = pos[f"B{i}"], pos[f"C{i}"], pos[f"O{i}"]
+            e = (b - c) / np.hypot(*(b - c))
+            f = -torques[i - 1] / _cross(b - o, e)
+            out[f"B{i}"] = out[f"C{i}"] = out[f"O{i}"] = np.abs(f)
+            rods += f * e
+            moment_of_rods += _cross(c - pos["A"], f * e)
+        r1, r2 = pos["B1"] - pos["O1"], pos["B1"] - pos["A"]
+        # [r1 x P, r2 x P] = [M_1, Σ (C_i - A) x f_i e_i]: P from the 2x2 system per sample
+        det = r1[0] * r2[1] - r1[1] * r2[0]
+        m1, m2 = torques[0], moment_of_rods
+        px = (m1 * r2[0] - m2 * r1[0]) / det
+        py = (m1 * r2[1] - m2 * r1[1]) / det
+        out["B1"] = out["O1"] = np.hypot(px, py)
+        out["A"] = out["O"] = np.hypot(px - rods[0], py - rods[1])
+        return out
+
     @staticmethod
     def pin_radius(lengths, options) -> float:
         """|AC_i|: l2 - l2' (collinear layout) or l2' (eq. 2 to the letter)."""
@@ -123,3 +155,8 @@ class FourBarConverter(Mechanism):
         if values["l1"] >= values["l0"]:
             raise ProblemError(f"design.l1 must be shorter than l0 (got l1 = {values['l1']:g}, "
                                f"l0 = {values['l0']:g}): the crank would reach the rocker pivots")
+
+
+def _cross(a, b):
+    """The planar cross product a_x·b_y − a_y·b_x, per sample."""
+    return a[0] * b[1] - a[1] * b[0]

@@ -116,6 +116,7 @@ UNITS: dict[str, str] = {
     "omega_out_min": "rad/s", "delta_dynamic": "-", "delta_mean_dynamic": "-",
     "delta_kinematic": "-", "delta_mean_kinematic": "-", "eps": "rad", "eps_max": "rad",
     "power_balance": "- ((P_in - P_out)/P_in)", "steady_residual": "- (relative)",
+    "engaged_share": "- (share of the cycle's time)",
     "rtol": "-", "atol": "rad", "cycles": COUNT, "period_turns": COUNT, "steps": COUNT,
     "events": COUNT, "counters": "- (counts)",
 }
@@ -125,6 +126,7 @@ SUFFIX_UNITS: dict[str, str] = {
     "_g_mm": "g*mm", "_rad_s": "rad/s", "_kg_m3": "kg/m^3",
     "_kg_m": "kg/m", "_n_m2": "N*m^2", "_gpa": "GPa", "_rpm": "rpm", "_deg": "deg",
     "_mm": "mm", "_kg": "kg", "_s2": "s^2", "_w": "W", "_rad": "rad", "_s": "s",
+    "_n_m": "N*m", "_n": "N",
 }
 
 #: mappings whose numbers share one unit: named once, not entered

@@ -172,8 +172,10 @@ class SolveResult(Tabular):
 
     def to_frame(self):
         """One row per count (named by its mechanism: phases, sections, freewheels): status,
-        exact δ, ratio, least transmission angle, the lengths in mm, IPOPT iterations, and
-        why a count has no optimum."""
+        exact δ, ratio, least transmission angle, the lengths in mm under their design keys
+        (``l0``, … as in every other table; ``frame.attrs["units"]`` gives each column's
+        unit), IPOPT iterations, and why a count has no optimum. The lengths' older columns
+        ``l0_mm``, … stay one release as deprecated aliases, at the end."""
         import pandas as pd
 
         model = get_mechanism(self.mechanism)
@@ -182,11 +184,16 @@ class SolveResult(Tabular):
         for p in self.per_phase:
             row = {"count": p.count, model.count_variable: p.count, "status": p.status, "delta": p.delta, "ratio": p.ratio,
                    "min_transmission_angle_deg": p.min_transmission_angle_deg}
-            row |= {f"{k}_mm": (p.design or {}).get(k) for k in lengths}
+            row |= {k: (p.design or {}).get(k) for k in lengths}
             row |= {"iterations": p.iterations, "best": p.design is not None and
                     p.design == self.design, "message": p.message}
+            row |= {f"{k}_mm": row[k] for k in lengths}          # deprecated aliases
             rows.append(row)
-        return pd.DataFrame(rows)
+        frame = pd.DataFrame(rows)
+        frame.attrs["units"] = {k: "mm" for k in lengths} | {
+            "delta": "-", "ratio": "-", "min_transmission_angle_deg": "deg"}
+        frame.attrs["deprecated"] = {f"{k}_mm": k for k in lengths}
+        return frame
 
     def to_dict(self) -> dict:
         """The contract's keys, then ``schema_version`` and ``units``

@@ -8,6 +8,10 @@ from optdesign.problem.loader import problem_from_dict
 from optdesign.solver import solve, verify
 from tests.conftest import ROOT
 
+#: the scales here are extreme on purpose (40 m frames, 0.02 mm cranks): their unit warnings
+#: are expected
+pytestmark = pytest.mark.filterwarnings("ignore::optdesign.errors.UnitWarning")
+
 FAST = {"starts": 3, "agree": 1}
 
 

@@ -11,17 +11,19 @@ from tests.conftest import ROOT, file_data
 DISC = ROOT / "problems" / "sharkov2022_disc.yaml"
 
 
+def _disc_design(scale: float) -> dict:
+    """The disc problem's design block with every length times ``scale`` (a unit mistake)."""
+    free = {"l0": (100, 400, 225), "l2": (100, 400, 225), "l2_prime": (30, 300, 100),
+            "l3": (20, 150, 56)}
+    return {"design": {k: {"lower": lo * scale, "upper": hi * scale, "initial": x * scale}
+                       for k, (lo, hi, x) in free.items()} | {"l1": 20 * scale, "phases": 6}}
+
+
 @pytest.mark.parametrize("changes,phrase", [
-    ({"design": {"l0": {"lower": 0.1, "upper": 0.4, "initial": 0.225}, "l1": 0.02,
-                 "l2": {"lower": 0.1, "upper": 0.4, "initial": 0.225},
-                 "l2_prime": {"lower": 0.03, "upper": 0.3, "initial": 0.1},
-                 "l3": {"lower": 0.02, "upper": 0.15, "initial": 0.056}, "phases": 6}},
+    (_disc_design(1e-3),
      "design.l0, design.l1, design.l2, design.l2_prime, design.l3 are under 1 mm (down to "
      "0.02): lengths are in mm (metres?)"),
-    ({"design": {"l0": {"lower": 100e3, "upper": 400e3, "initial": 225e3}, "l1": 20e3,
-                 "l2": {"lower": 100e3, "upper": 400e3, "initial": 225e3},
-                 "l2_prime": {"lower": 30e3, "upper": 300e3, "initial": 100e3},
-                 "l3": {"lower": 20e3, "upper": 150e3, "initial": 56e3}, "phases": 6}},
+    (_disc_design(1e3),
      "design.l0, design.l1, design.l2, design.l2_prime, design.l3 are over 10 m (up to "
      "400000 mm): lengths are in mm"),
     ({"constraints__min_transmission_angle_deg": 0.785},

@@ -1,7 +1,7 @@
 """``optdesign analyze PROBLEM.yaml [--json] [--out DIR] [--design FILE [--point K | --knee]]``."""
 from __future__ import annotations
 
-from optdesign.commands.design_source import add_arguments, chosen_design
+from optdesign.commands.design_source import add_arguments, loaded
 
 
 def add_parser(sub) -> None:
@@ -17,11 +17,8 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     from optdesign.analyses.analyze import analyze, format_analysis
     from optdesign.outputs.atomic import json_text
-    from optdesign.problem.loader import load_problem
 
-    problem = load_problem(args.problem)
-    chosen = chosen_design(args, problem, one_count=False)
-    problem = chosen.problem(problem)
+    problem, chosen = loaded(args, one_count=False)
     out = None
     if args.out is not None:
         from optdesign.outputs.checks import prepare_out

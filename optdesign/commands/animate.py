@@ -9,7 +9,7 @@ beside it (:mod:`optdesign.export.animation`). Exit 0; 1 when the design does no
 """
 from __future__ import annotations
 
-from optdesign.commands.design_source import add_arguments, chosen_design
+from optdesign.commands.design_source import add_arguments, checked_eccentricity, loaded
 
 #: most frames of --frames
 MAX_FRAMES = 720
@@ -34,14 +34,9 @@ def run(args) -> int:
 
     from optdesign.errors import UsageError
     from optdesign.outputs.checks import prepare_out
-    from optdesign.problem.loader import MIN_ECCENTRICITY, load_problem
 
-    problem = load_problem(args.problem)
-    chosen = chosen_design(args, problem)
-    problem = chosen.problem(problem)
-    if not MIN_ECCENTRICITY <= args.eccentricity <= 1:
-        raise UsageError(f"--eccentricity must lie in [{MIN_ECCENTRICITY:g}, 1] (got "
-                         f"{args.eccentricity:g})")
+    problem, chosen = loaded(args)
+    checked_eccentricity(args.eccentricity)
     if not 8 <= args.frames <= MAX_FRAMES:
         raise UsageError(f"--frames must lie in [8, {MAX_FRAMES}] (got {args.frames})")
     names = ["animation.html", "animation.gif"] + (["animation.mp4"] if shutil.which("ffmpeg")

@@ -2,7 +2,7 @@
 position, velocity and acceleration analogues."""
 from __future__ import annotations
 
-from optdesign.commands.design_source import add_arguments, chosen_design
+from optdesign.commands.design_source import add_arguments, loaded
 
 #: most crank samples of --samples (a figure of 1441 is already smooth)
 MAX_SAMPLES = 100_000
@@ -26,11 +26,9 @@ def run(args) -> int:
     from optdesign.errors import UsageError
     from optdesign.outputs.checks import prepare_out
     from optdesign.commands.files import write_curves
-    from optdesign.problem.loader import MIN_ECCENTRICITY, load_problem
+    from optdesign.problem.loader import MIN_ECCENTRICITY
 
-    problem = load_problem(args.problem)
-    chosen = chosen_design(args, problem, one_count=False)
-    problem = chosen.problem(problem)
+    problem, chosen = loaded(args, one_count=False)
     if not 0 < args.eccentricity <= 1:
         raise UsageError(f"--eccentricity must lie in (0, 1] (got {args.eccentricity:g})")
     if args.eccentricity < MIN_ECCENTRICITY:

@@ -68,6 +68,27 @@ def add_arguments(parser) -> None:
                         help="with --design pareto.csv: the front's knee")
 
 
+def loaded(args, one_count: bool = True):
+    """(the problem file ``args.problem`` with the design ``args`` names fixed, that
+    :class:`ChosenDesign`): what every command that evaluates a design starts from."""
+    from optdesign.problem.loader import load_problem
+
+    problem = load_problem(args.problem)
+    chosen = chosen_design(args, problem, one_count)
+    return chosen.problem(problem), chosen
+
+
+def checked_eccentricity(value: float) -> float:
+    """``--eccentricity``, a fraction of the regulating length the loader admits
+    (UsageError otherwise)."""
+    from optdesign.problem.loader import MIN_ECCENTRICITY
+
+    if not MIN_ECCENTRICITY <= value <= 1:
+        raise UsageError(f"--eccentricity must lie in [{MIN_ECCENTRICITY:g}, 1] (got "
+                         f"{value:g})")
+    return value
+
+
 def chosen_design(args, problem, one_count: bool = True) -> ChosenDesign:
     """The design ``args`` names for ``problem`` (see the module's docstring). With
     ``one_count``, the file's own design must fix its count."""

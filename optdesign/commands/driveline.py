@@ -7,7 +7,7 @@ does not assemble (the shaft's own figures are still printed and drawn).
 """
 from __future__ import annotations
 
-from optdesign.commands.design_source import add_arguments, chosen_design
+from optdesign.commands.design_source import add_arguments, loaded
 
 
 def add_parser(sub) -> None:
@@ -27,12 +27,9 @@ def run(args) -> int:
     from optdesign.outputs.atomic import json_text
     from optdesign.outputs.checks import prepare_out
     from optdesign.commands.files import write_driveline
-    from optdesign.problem.loader import load_problem
 
-    problem = load_problem(args.problem)
+    problem, chosen = loaded(args, one_count=False)
     section = problem.require_section("driveline")
-    chosen = chosen_design(args, problem, one_count=False)
-    problem = chosen.problem(problem)
     out = prepare_out(args.out, problem.name, files=("driveline.png",))
     result = analyze(problem)
     path = out / "driveline.png"

@@ -9,7 +9,7 @@ the eccentricity; 2 for bad input.
 """
 from __future__ import annotations
 
-from optdesign.commands.design_source import add_arguments, chosen_design
+from optdesign.commands.design_source import add_arguments, checked_eccentricity, loaded
 
 FORMATS = {"dxf": "linkage.dxf", "svg": "linkage.svg", "csv": "trajectories.csv"}
 
@@ -38,11 +38,9 @@ def run(args) -> int:
     from optdesign.evaluation.design import Design
     from optdesign.outputs.atomic import atomic_write_text
     from optdesign.outputs.checks import prepare_out
-    from optdesign.problem.loader import MIN_ECCENTRICITY, load_problem
 
-    problem = load_problem(args.problem)
-    chosen = chosen_design(args, problem)
-    problem = chosen.problem(problem)
+    problem, chosen = loaded(args)
+    checked_eccentricity(args.eccentricity)
     formats = [f.strip().lower() for f in args.format.split(",") if f.strip()]
     unknown = [f for f in formats if f not in FORMATS]
     if unknown or not formats:
@@ -50,9 +48,6 @@ def run(args) -> int:
                          f"{args.format!r})")
     if not math.isfinite(args.angle):
         raise UsageError(f"--angle must be a number of degrees (got {args.angle})")
-    if not MIN_ECCENTRICITY <= args.eccentricity <= 1:
-        raise UsageError(f"--eccentricity must lie in [{MIN_ECCENTRICITY:g}, 1] (got "
-                         f"{args.eccentricity:g})")
     out = prepare_out(args.out, problem.name, files=tuple(FORMATS[f] for f in formats))
     design = Design.from_problem(problem)
     design.check_assembly(args.eccentricity)          # AssemblyError: exit 1, names the chain

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import sys
 
-from optdesign.commands.design_source import add_arguments, chosen_design
+from optdesign.commands.design_source import add_arguments, loaded
 
 
 def add_parser(sub) -> None:
@@ -41,12 +41,9 @@ def run(args) -> int:
     from optdesign.outputs.atomic import json_text
     from optdesign.outputs.checks import prepare_out
     from optdesign.commands.files import write_simulation
-    from optdesign.problem.loader import load_problem
 
-    problem = load_problem(args.problem)
+    problem, chosen = loaded(args, one_count=False)
     section = problem.require_section("dynamics")
-    chosen = chosen_design(args, problem, one_count=False)
-    problem = chosen.problem(problem)
     overrides = {k: getattr(args, k) for k in ("freewheel", "crank", "cycles")
                  if getattr(args, k) is not None}
     if overrides.get("cycles", 1) < 1:

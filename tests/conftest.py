@@ -114,3 +114,16 @@ def chromium_run(chromium, tmp_path, *args) -> str:
     done = subprocess.run(cmd, capture_output=True, text=True, timeout=60, check=False)
     assert done.returncode == 0, done.stderr[-2000:]
     return done.stdout
+
+
+@pytest.fixture(scope="session")
+def solved_disc(tmp_path_factory):
+    """``optdesign solve problems/sharkov2022_disc.yaml --no-plots`` once per session: (its
+    folder, its result.json). Its files are read, never changed, by the tests that use it."""
+    import json
+
+    out = tmp_path_factory.mktemp("solved_disc")
+    code, _ = run_main(["solve", ROOT / "problems" / "sharkov2022_disc.yaml", "--out", out,
+                        "--no-plots"])
+    assert code == 0
+    return out, json.loads((out / "result.json").read_text())

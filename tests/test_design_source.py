@@ -15,11 +15,8 @@ DYNAMICS = ROOT / "problems" / "sharkov2022_dynamics.yaml"
 
 
 @pytest.fixture(scope="module")
-def solved(tmp_path_factory):
-    out = tmp_path_factory.mktemp("solved")
-    code, _ = run_main(["solve", DISC, "--out", out, "--no-plots"])
-    assert code == 0
-    return out, json.loads((out / "result.json").read_text())
+def solved(solved_disc):
+    return solved_disc
 
 
 def test_solve_writes_the_problem_with_its_optimum_fixed(solved):

@@ -25,7 +25,7 @@ HOUSING_FILE = ROOT / "problems" / "housing_disc.yaml"
 INTERVAL = {"eccentricity": {"lower": 0.2, "upper": 1.0}}
 
 
-def _dense_worst(design, problem, name, lower=0.2, upper=1.0, n=161):
+def _dense_worst(design, problem, name, lower=0.2, upper=1.0, n=81):
     """The worst of quantity ``name`` over ``n`` evenly spaced eccentricities, each exact."""
     at = _AtEccentricity(design, problem.stroke, problem.input_speed, problem.objective.ripple)
     values = np.array([at.quantity(name, e) for e in np.linspace(lower, upper, n)])
@@ -137,13 +137,13 @@ def _corner_worst(problem, design, name):
 
 
 def test_a_robust_solve_holds_a_housing_bound_for_every_part_of_the_box(tmp_path):
-    data = file_data(HOUSING_FILE, objective__robust="worst_case",
-                     tolerances={"default": 0.05, "lengths": {"l1": 0.02}})
+    data = file_data(HOUSING_FILE, objective__robust="worst_case", solver={"starts": 2},
+                     tolerances={"default": 0.05, "lengths": {"l1": 0}})
     problem = problem_from_dict(data, where="housing_robust.yaml")
     # the nominal optimum sits on the casing: parts of its box break it
     nominal = json.loads(_solved(tmp_path, file_data(HOUSING_FILE))).get("design")
     worst_nominal, corners = _corner_worst(problem, nominal, "housing_radius")
-    assert corners == 32 and worst_nominal > 320 + 0.01
+    assert corners == 16 and worst_nominal > 320 + 0.01
     result = json.loads(_solved(tmp_path, data))
     assert result["status"] == "optimal"
     best = next(p for p in result["per_phase"] if p["status"] == "optimal")

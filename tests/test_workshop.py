@@ -13,17 +13,14 @@ DISC = ROOT / "problems" / "sharkov2022_disc.yaml"
 
 
 @pytest.fixture(scope="module")
-def exported(tmp_path_factory):
-    import json
-
+def exported(solved_disc, tmp_path_factory):
+    solved, result = solved_disc
     out = tmp_path_factory.mktemp("exported")
-    code, _ = run_main(["solve", DISC, "--out", out / "solved", "--no-plots"])
-    assert code == 0
-    code, text = run_main(["export", DISC, "--design", out / "solved" / "design.yaml",
+    code, text = run_main(["export", DISC, "--design", solved / "design.yaml",
                            "--angle", "30", "--out", out / "export"])
     assert code == 0
-    assert text.splitlines()[0] == f"design: the design of {out / 'solved' / 'design.yaml'}"
-    return out / "export", json.loads((out / "solved" / "result.json").read_text())
+    assert text.splitlines()[0] == f"design: the design of {solved / 'design.yaml'}"
+    return out / "export", result
 
 
 def test_the_dxf_reads_back_with_the_lengths_to_1e_9_mm(exported):
@@ -112,9 +109,9 @@ def test_a_format_not_known_is_exit_2(tmp_path, capsys):
 
 # --------------------------------------------------------------------------- animate
 @pytest.fixture(scope="module")
-def animated(exported):
+def animated(exported, solved_disc):
     out, result = exported
-    solved = out.parent / "solved"
+    solved = solved_disc[0]
     code, text = run_main(["animate", DISC, "--design", solved / "result.json",
                            "--out", out.parent / "animated"])
     assert code == 0 and text.startswith(f"design: the optimum of {solved / 'result.json'}")
@@ -175,11 +172,11 @@ def test_the_gif_turns_the_crank_once(animated):
 
 
 # --------------------------------------------------------------------------- compare, and all
-def test_compare_puts_the_optimum_beside_the_initial_design(exported, tmp_path):
+def test_compare_puts_the_optimum_beside_the_initial_design(exported, solved_disc, tmp_path):
     import json
 
     out, result = exported
-    solved = out.parent / "solved"
+    solved = solved_disc[0]
     code, text = run_main(["compare", solved / "result.json", solved / "design.yaml", DISC,
                            "--json", "--out", tmp_path])
     doc = json.loads(text)
@@ -194,13 +191,13 @@ def test_compare_puts_the_optimum_beside_the_initial_design(exported, tmp_path):
     assert (tmp_path / "compare.csv").read_text().startswith("label,")
 
 
-def test_one_design_through_every_command(exported, tmp_path):
-    """The issue's path from a fresh clone: solve the disc problem, then export, animate,
-    simulate and compare on its design.yaml and result.json (export and animate above)."""
+def test_one_design_through_every_command(exported, solved_disc, tmp_path):
+    """From a fresh clone: solve the disc problem, then export, animate, simulate and compare
+    on its design.yaml and result.json (the solve in conftest, export and animate above)."""
     import json
 
     out, result = exported
-    solved = out.parent / "solved"
+    solved = solved_disc[0]
     dynamics = ROOT / "problems" / "sharkov2022_dynamics.yaml"
     code, text = run_main(["simulate", dynamics, "--design", solved / "design.yaml", "--json",
                            "--out", tmp_path / "simulated"])

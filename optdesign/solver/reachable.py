@@ -92,16 +92,24 @@ def relaxed(problem, name: str):
             "least" if q.worst == "max" else "largest", bound, q.unit)
 
 
+#: relaxed solves tried at most: each costs a multi-start solve, and one that is infeasible
+#: too costs a failed one
+MAX_RELAXED = 2
+
+
 def reach_of(problem, count: int, binding: str | None, solve_phase) -> Reach | None:
     """The first of :func:`candidates` whose nearest reachable value lies beyond its bound
-    (``solve_phase`` solves each relaxed problem, without asking this again); else the
-    binding one's, within its bound (a design exists: more starts may find it); None where
-    none can be told."""
-    within = None
+    (``solve_phase`` solves each relaxed problem, without asking this again; at most
+    :data:`MAX_RELAXED` of them); else the first one's within its bound (a design exists:
+    more starts may find it); None where none can be told."""
+    within, tried = None, 0
     for name in candidates(problem, binding):
         found = relaxed(problem, name)
         if found is None:
             continue
+        if tried == MAX_RELAXED:
+            break
+        tried += 1
         variant, read, figure, side, bound, unit = found
         best = solve_phase(variant, count, workers=1, explain=False)
         if best.status != "optimal":

@@ -53,20 +53,6 @@ def test_known_optimum_of_the_disc_problem(disc_result):
     assert disc_result.delta == pytest.approx(0.140214, abs=1e-5)
 
 
-def test_infeasible_ratio_is_detected_and_named(write_problem, tmp_path, capsys):
-    path = write_problem(disc(objective__min_ratio=3.0))
-    out = tmp_path / "out"
-    assert main(["solve", str(path), "--out", str(out), "--json", "--no-plots"]) == 1
-    result = json.loads(capsys.readouterr().out)
-    assert result["status"] == "infeasible"
-    assert "min_ratio" in result["per_phase"][0]["binding"]
-    assert json.loads((out / "result.json").read_text())["status"] == "infeasible"
-    # how far out of reach: the largest ratio of the box (the disc problem's 0.728894, with l2
-    # on its bound: the least-ripple design's ratio too), verified
-    assert "min_ratio at least 3 is out of reach: the largest ratio any design in the bounds " \
-        "reaches with 6 phases is 0.72889" in result["per_phase"][0]["message"]
-
-
 def test_a_pin_radius_beyond_the_box_is_infeasible_with_the_reachable_value(write_problem):
     """l2 − l2′ is at most 400 − 30 = 370 mm in the disc problem's box: decided from the
     bounds, before any screening or IPOPT iteration."""

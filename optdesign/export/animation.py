@@ -59,7 +59,11 @@ def turn(design, stroke: str, input_speed: float, eccentricity: float = 1.0,
     output = np.maximum(curves.max(axis=0), 0.0)
     per_member = curves.reshape(len(STROKE_SIGNS[stroke]), count, frames).max(axis=0)
     members = _rocker_members(drawn, kin["theta"])
-    links = tuple((a, b, role, members.get((a, b))) for (a, b), role in drawn.roles.items())
+    pivot = drawn.crank_pivot
+    frame = tuple((pivot, j, "frame", None) for j in sorted(drawn.fixed - {pivot})
+                  if pivot is not None)               # the frame from the crank's pivot
+    links = frame + tuple((a, b, role, members.get((a, b)))
+                          for (a, b), role in drawn.roles.items())
     positions = drawn.turn.transpose(0, 2, 1)                           # (frames, joints, 2)
     return Turn(drawn.names, positions, links, np.degrees(phi), best % count, per_member,
                 output)
@@ -134,8 +138,10 @@ function el(parent, tag, attrs) {
   for (const k in attrs) e.setAttribute(k, attrs[k]);
   parent.appendChild(e); return e;
 }
+const width = role => w * (role === "frame" ? 0.7 : role === "coupler" ? 1.2 : 2);
 const lines = D.links.map(([a, b, role]) => el(L, "line", {stroke: D.colours[role],
-  "stroke-width": w * (role === "coupler" ? 1.2 : 2), "stroke-linecap": "round"}));
+  "stroke-width": width(role), "stroke-linecap": "round",
+  "stroke-dasharray": role === "frame" ? (4 * w) + "," + (3 * w) : "none"}));
 const dots = D.names.map(() => el(L, "circle", {r: w * 2.2, fill: "#fff", stroke: "#333",
   "stroke-width": w * 0.6}));
 const x0 = 48, x1 = 548, y0 = 262, y1 = 24;
@@ -167,7 +173,7 @@ function draw(f) {
     ln.setAttribute("x2", q[0]); ln.setAttribute("y2", -q[1]);
     const drives = role === "rocker" && member === D.driving[f];
     ln.setAttribute("stroke", drives ? D.colours.driving : D.colours[role]);
-    ln.setAttribute("stroke-width", w * (drives ? 3.4 : role === "coupler" ? 1.2 : 2));
+    ln.setAttribute("stroke-width", drives ? w * 3.4 : width(role));
   });
   D.names.forEach((n, i) => { dots[i].setAttribute("cx", P[i][0]);
     dots[i].setAttribute("cy", -P[i][1]); });
@@ -210,8 +216,8 @@ def movie(data: Turn, title: str, path, fps: int = 24) -> None:
     ax.set_ylim(low[1] - pad, high[1] + pad)
     ax.set_aspect("equal")
     ax.set_axis_off()
-    drawn = [ax.plot([], [], color=COLOURS[role], lw=1.2 if role == "coupler" else 2.2,
-                     solid_capstyle="round")[0] for _, _, role, _ in data.links]
+    drawn = [ax.plot([], [], color=COLOURS[role], lw=_width(role), ls="--" if role == "frame"
+                     else "-", solid_capstyle="round")[0] for _, _, role, _ in data.links]
     joints = ax.plot([], [], "o", ms=3, mfc="white", mec="0.2")[0]
     for ys in data.speeds:
         bx.plot(data.phi_deg, ys, color=COLOURS["rocker"], alpha=0.35, lw=0.9)
@@ -235,7 +241,7 @@ def movie(data: Turn, title: str, path, fps: int = 24) -> None:
             line.set_data([p[0], q[0]], [p[1], q[1]])
             drives = role == "rocker" and member == data.driving[f]
             line.set_color(COLOURS["driving"] if drives else COLOURS[role])
-            line.set_linewidth(3.6 if drives else 1.2 if role == "coupler" else 2.2)
+            line.set_linewidth(3.6 if drives else _width(role))
         joints.set_data(P[:, 0], P[:, 1])
         cursor.set_xdata([data.phi_deg[f]] * 2)
         mark.set_data([data.phi_deg[f]], [data.output[f]])
@@ -245,6 +251,11 @@ def movie(data: Turn, title: str, path, fps: int = 24) -> None:
     writer = PillowWriter(fps=fps) if str(path).endswith(".gif") else FFMpegWriter(fps=fps)
     animation.save(str(path), writer=writer)
     plt.close(fig)
+
+
+def _width(role: str) -> float:
+    """A link's line width in the movie, by its role."""
+    return {"frame": 0.7, "coupler": 1.2}.get(role, 2.2)
 
 
 def turn_title(problem, design, figures) -> str:

@@ -66,7 +66,7 @@ def candidate(path: str, base=None):
     from pathlib import Path
 
     from optdesign.analyses.compare import Candidate
-    from optdesign.commands.design_source import chosen_design
+    from optdesign.commands.design_source import design_from_file
     from optdesign.errors import UsageError, shown
     from optdesign.problem.loader import load_problem, problem_from_dict
     from optdesign.problem.yaml_text import read_text
@@ -93,11 +93,7 @@ def candidate(path: str, base=None):
             "objective": {"ripple": objective.get("ripple", "midrange")},
             "regulation": {"eccentricity": objective.get("eccentricities", [1.0])}},
             where=str(file.name))
-
-    class _Args:
-        design, point, knee = path, None, False
-
-    chosen = chosen_design(_Args, problem)
+    chosen = design_from_file(path, problem)
     extra = {}
     if isinstance(data.get("worst_case_delta"), (int, float)):
         extra["worst_case_delta"] = float(data["worst_case_delta"])

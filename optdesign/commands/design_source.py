@@ -106,8 +106,15 @@ def chosen_design(args, problem, one_count: bool = True) -> ChosenDesign:
         return ChosenDesign(None, "the file's initial design (free lengths at their initial "
                                   "values; --design FILE evaluates a solved one)"
                             if problem.free_lengths() else "the file's design")
-    path = Path(args.design)
-    where = f"--design {shown(args.design)}"
+    return design_from_file(args.design, problem, point, knee)
+
+
+def design_from_file(name: str, problem, point: int | None = None,
+                     knee: bool = False) -> ChosenDesign:
+    """The design file ``name`` holds (a result.json, a design.yaml, or a front with
+    ``point`` or ``knee``), checked against ``problem``."""
+    path = Path(name)
+    where = f"--design {shown(name)}"
     suffix = path.suffix.lower()
     if suffix in PROBLEM_SUFFIXES:
         if point is not None or knee:

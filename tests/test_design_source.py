@@ -108,3 +108,18 @@ def test_a_design_that_cannot_be_taken_is_one_line_and_exit_2(solved, tmp_path, 
     assert main(["analyze", str(DISC), *argv]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err, err
+
+
+def test_a_long_name_still_makes_a_loadable_design_file(write_problem, tmp_path):
+    """The loader's longest name (100 characters) plus _design would be refused: the design
+    file's name is cut to fit."""
+    from optdesign.problem.loader import MAX_NAME_CHARS, load_problem
+    from tests.conftest import file_data
+
+    path = write_problem(file_data(DISC, name="n" * MAX_NAME_CHARS,
+                                   design={"l0": 225, "l1": 20, "l2": 225, "l2_prime": 100,
+                                           "l3": 56, "phases": 6}))
+    code, _ = run_main(["solve", path, "--out", tmp_path / "out", "--no-plots"])
+    assert code == 0
+    fixed = load_problem(tmp_path / "out" / "design.yaml")
+    assert len(fixed.name) == MAX_NAME_CHARS and fixed.name.endswith("_design")

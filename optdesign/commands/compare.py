@@ -3,7 +3,7 @@ side by side.
 
 Each of A, B, ... is a ``design.yaml`` (a problem file, its design fixed) or a solve's
 ``result.json`` (evaluated as the ``design.yaml`` beside it, else under ``--problem``, else
-under the problem its own keys describe). Prints a table: lengths, count, δ, ratio, least
+under the problem its own keys describe, the mechanism's options at their defaults). Prints a table: lengths, count, δ, ratio, least
 transmission angle, every quantity, the robust solve's worst δ where present; writes
 ``compare.csv`` and ``compare.png`` (their output speeds overlaid) into DIR (default
 results/compare/). Exit 0; 2 for bad input (one line naming the file).

@@ -28,6 +28,8 @@ from optdesign.errors import ProblemError, UsageError, shown
 #: the front's files whose points --point and --knee pick from
 FRONT_SUFFIXES = (".csv",)
 PROBLEM_SUFFIXES = (".yaml", ".yml")
+#: design.yaml's name: the problem's, so marked (within the loader's longest name)
+DESIGN_SUFFIX = "_design"
 
 
 @dataclass(frozen=True)
@@ -275,6 +277,7 @@ def design_yaml(source_path, result) -> str | None:
     a design or a readable source."""
     import yaml
 
+    from optdesign.problem.loader import MAX_NAME_CHARS
     from optdesign.problem.yaml_text import parse, read_text
 
     if not result.design or source_path is None:
@@ -286,7 +289,7 @@ def design_yaml(source_path, result) -> str | None:
     if not isinstance(data, dict):
         return None
     data = dict(data)
-    data["name"] = f"{result.name}_design"
+    data["name"] = f"{result.name[:MAX_NAME_CHARS - len(DESIGN_SUFFIX)]}{DESIGN_SUFFIX}"
     data["design"] = {k: (int(v) if float(v).is_integer() and k not in _lengths(result)
                           else float(v)) for k, v in result.design.items()}
     header = (f"# {result.name}, its optimum fixed: the problem file {Path(source_path).name} "

@@ -17,11 +17,15 @@ from __future__ import annotations
 import numpy as np
 
 
-def freewheel_torques(model, trace: dict) -> np.ndarray:
-    """T_k per freewheel and recorded sample (N·m): λ_k·ε_k + c_k·ε̇_k while engaged."""
-    phi, w_in, w_out = trace["phi"], trace["omega_in"], trace["omega_out"]
-    du = np.array([model.holders(p)[1] for p in phi]).T                     # (wheels, N)
-    rel_speed = du * w_in - w_out
+def holder_slopes(model, phi: np.ndarray) -> np.ndarray:
+    """u_k'(φ) per freewheel and crank angle: the holders' angle per radian of crank."""
+    return np.array([model.holders(p)[1] for p in phi]).T                  # (wheels, N)
+
+
+def freewheel_torques(model, trace: dict, du: np.ndarray) -> np.ndarray:
+    """T_k per freewheel and recorded sample (N·m): λ_k·ε_k + c_k·ε̇_k while engaged, with
+    ε̇_k = u_k'·φ̇ − ψ̇ (``du``: :func:`holder_slopes` at the samples)."""
+    rel_speed = du * trace["omega_in"] - trace["omega_out"]
     torque = model.stiffness[:, None] * trace["eps"] + model.damping[:, None] * rel_speed
     return np.where(trace["engaged"], torque, 0.0)
 
@@ -37,7 +41,8 @@ def loads(design, model, trace: dict, reduction: float,
     ``joints`` (per joint: ``peak_force_n`` and its kind), or ``joints_note`` saying why
     there are none."""
     t = np.asarray(trace["t"], dtype=float)
-    torque = freewheel_torques(model, trace)
+    du = holder_slopes(model, trace["phi"])
+    torque = freewheel_torques(model, trace, du)
     dt = np.diff(t)
     span = float(t[-1] - t[0]) if t.size > 1 else 0.0
     labels = model.labels()
@@ -55,7 +60,6 @@ def loads(design, model, trace: dict, reduction: float,
                            "peak_at_phi_deg": at, "engaged_share": share})
     total = torque.sum(axis=0)
     mean = float(np.trapezoid(total, t) / span) if span > 0 else float("nan")
-    du = np.array([model.holders(p)[1] for p in trace["phi"]]).T
     out = {"freewheels": freewheels, "mean_freewheel_torque_n_m": mean,
            "peak_crank_torque_n_m": float((torque * du).sum(axis=0).max())}
     series = {"freewheel_torque": torque, "joint_forces": {}}
@@ -64,14 +68,15 @@ def loads(design, model, trace: dict, reduction: float,
         out["joints_note"] = ("the composite freewheel model has one freewheel on the whole "
                               "converter: its torque is not split between the members")
         return out, series
-    members = rocker_torques(model, torque, reduction)
-    forces = joint_forces(design, trace["phi"], members)
+    positions = joint_positions(design, trace["phi"])
+    forces = design.model.joint_forces(positions, rocker_torques(model, torque, reduction))
     if forces is None:
         out["joints"] = None
         out["joints_note"] = f"{design.mechanism} has no joint force analysis yet"
         return out, series
     series["joint_forces"] = forces
-    fixed = _fixed_joints(design)
+    fixed = {name for name, xy in positions.items()            # a pivot does not move
+             if np.ptp(xy, axis=1).max() <= 1e-9 * max(1.0, np.abs(xy).max())}
     out["joints"] = [{"joint": name, "kind": "pivot" if name in fixed else "pin",
                       "peak_force_n": float(np.max(f)),
                       "peak_at_phi_deg": float(np.degrees(trace["phi"][int(np.argmax(f))])
@@ -89,21 +94,14 @@ def rocker_torques(model, torque: np.ndarray, reduction: float) -> np.ndarray:
     return out
 
 
-def joint_forces(design, phi: np.ndarray, members: np.ndarray) -> dict | None:
-    """The mechanism's joint forces (N) at the crank angles ``phi`` under the members'
-    torques; None where it has no such analysis."""
+def joint_positions(design, phi: np.ndarray) -> dict:
+    """Every joint's position (mm, ``{name: (2, samples)}``) at the crank angles ``phi``
+    (e = 1, as the drive runs)."""
     fn, names, _ = design.model.joints(design.count, design.option_key)
     phi = np.asarray(phi, dtype=float)
     points = np.array(fn.map(phi.size)(phi[None, :], design.p(1.0))).reshape(2, phi.size,
                                                                              len(names))
-    joints = {name: points[:, :, i] for i, name in enumerate(names)}
-    return design.model.joint_forces(joints, members)
-
-
-def _fixed_joints(design) -> set[str]:
-    from optdesign.figures.design import linkage
-
-    return set(linkage(design, 1.0, 90).fixed)
+    return {name: points[:, :, i] for i, name in enumerate(names)}
 
 
 def _joint_order(name: str) -> tuple:

@@ -470,9 +470,9 @@ class PhaseNLP:
         z, or z as the objective, holds every figure. ``tags``, ``ripples`` and ``means``:
         the part's blocks in :attr:`eccs` order; ``cos_sq`` its cos²μ rows by tag, whose
         epigraph is the least transmission angle's figure (cos² of it: smaller is better). The
-        nominal's spec at its worst covers the
-        regulation interval's slots too, a row block per slot (free while the slot is idle);
-        a scenario's variables and rows carry its name (fixed and free while it is idle)."""
+        nominal's spec at its worst covers the regulation interval's slots too, a row block
+        per slot (free while the slot is idle); a scenario's variables and rows carry its name
+        (fixed and free while it is idle)."""
         out = {}
         listed = [tags[i] for i in self.listed]
         for spec in self.specs:
@@ -481,21 +481,17 @@ class PhaseNLP:
                 out[spec.key] = means[0]
             elif spec.name == "ripple":
                 out[spec.key] = t if spec.at is None else ripples[tags.index(at[0])]
-            elif spec.name == "transmission_angle":
-                z = b.variable(f"quantity_{spec.key}" + (f"_{scenario}" if scenario else ""), 1)
-                rows = ca.vertcat(*[cos_sq[tag] for tag in at])
-                b.row(f"quantity_epigraph_{spec.key}" + (f"[{scenario}]" if scenario else ""),
-                      z - rows)
-                out[spec.key] = z
             else:
                 z = b.variable(f"quantity_{spec.key}" + (f"_{scenario}" if scenario else ""), 1)
-                sign = 1 if get_quantity(spec.name).worst == "max" else -1
-                figures = ca.vertcat(*[self._quantity_rows[(spec.name, tag)] for tag in at])
+                if spec.name == "transmission_angle":   # cos²μ: larger is worse
+                    sign, figure = 1, cos_sq.__getitem__
+                else:
+                    sign = 1 if get_quantity(spec.name).worst == "max" else -1
+                    figure = (lambda tag, name=spec.name: self._quantity_rows[(name, tag)])
                 b.row(f"quantity_epigraph_{spec.key}" + (f"[{scenario}]" if scenario else ""),
-                      sign * (z - figures))
+                      sign * (z - ca.vertcat(*[figure(tag) for tag in at])))
                 for tag in self.slot_tags if spec.at is None and not scenario else ():
-                    b.row(f"quantity_epigraph_{spec.key}[{tag}]",
-                          sign * (z - self._quantity_rows[(spec.name, tag)]))
+                    b.row(f"quantity_epigraph_{spec.key}[{tag}]", sign * (z - figure(tag)))
                 out[spec.key] = z
         return out
 

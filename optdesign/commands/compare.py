@@ -62,14 +62,12 @@ def run(args) -> int:
 
 def candidate(path: str, base=None):
     """The :class:`~optdesign.analyses.compare.Candidate` a command-line argument names."""
-    import json
     from pathlib import Path
 
     from optdesign.analyses.compare import Candidate
-    from optdesign.commands.design_source import design_from_file
+    from optdesign.commands.design_source import design_from_file, read_json
     from optdesign.errors import UsageError, shown
     from optdesign.problem.loader import load_problem, problem_from_dict
-    from optdesign.problem.yaml_text import read_text
 
     file = Path(path)
     if file.suffix.lower() in (".yaml", ".yml"):
@@ -78,10 +76,7 @@ def candidate(path: str, base=None):
         raise UsageError(f"{shown(path)}: compare takes a design.yaml or a result.json")
     beside = file.with_name("design.yaml")
     problem = base or (load_problem(beside) if beside.is_file() else None)
-    try:
-        data = json.loads(read_text(file))
-    except ValueError:
-        raise UsageError(f"{shown(path)}: is not JSON") from None
+    data = read_json(file, shown(path))
     if not isinstance(data, dict):
         raise UsageError(f"{shown(path)}: has no design object")
     if problem is None:             # the problem its own keys describe

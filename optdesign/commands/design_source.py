@@ -143,7 +143,8 @@ def _text(path: Path, where: str) -> str:
         raise UsageError(f"{where}: {str(exc).split(': ', 1)[-1]}") from None
 
 
-def _json(path: Path, where: str):
+def read_json(path: Path, where: str):
+    """The JSON document of a regular file of at most 1 MiB (UsageError naming ``where``)."""
     text = _text(path, where)
     try:
         return json.loads(text)
@@ -153,7 +154,7 @@ def _json(path: Path, where: str):
 
 def _from_result(path: Path, problem, where: str) -> tuple[dict, str]:
     """A solve's result.json (or any JSON with a ``design`` object)."""
-    data = _json(path, where)
+    data = read_json(path, where)
     design = data.get("design") if isinstance(data, dict) else None
     if not isinstance(design, dict):
         raise UsageError(f"{where}: has no design object (a solve that found none writes "
@@ -184,7 +185,7 @@ def _from_front(path: Path, problem, where: str, point: int | None) -> tuple[dic
     """The K-th point of a front's pareto.csv (or pareto.json), or its knee."""
     if point is None:
         front = path if path.suffix.lower() == ".json" else path.with_name("pareto.json")
-        data = _json(front, f"--knee: {shown(str(front))}")
+        data = read_json(front, f"--knee: {shown(str(front))}")
         knee = data.get("knee") if isinstance(data, dict) else None
         if not isinstance(knee, dict):
             raise UsageError(f"--knee: {shown(str(front))} has no knee (a front without a "
@@ -193,7 +194,7 @@ def _from_front(path: Path, problem, where: str, point: int | None) -> tuple[dic
                                            f"{_number(knee.get('delta'))}, ratio = "
                                            f"{_number(knee.get('ratio'))})")
     if path.suffix.lower() == ".json":
-        data = _json(path, where)
+        data = read_json(path, where)
         rows = data.get("points") if isinstance(data, dict) else None
         rows = rows if isinstance(rows, list) else []
     else:

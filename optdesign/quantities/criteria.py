@@ -222,6 +222,18 @@ def result_columns(problem) -> dict[str, str]:
             for c in constraints_of(problem) if isinstance(c, LengthConstraint) and c.column}
 
 
+def quantity_tolerance(value) -> float:
+    """The exact check's tolerance of a quantity's bound at ``value``: relative, at least
+    TOL_QUANTITY_REL in the quantity's unit (the NLP holds the bound to IPOPT's tolerance)."""
+    return TOL_QUANTITY_REL * max(1.0, abs(float(value)))
+
+
+def bound_excess(spec: QuantityBound, value: float) -> float:
+    """How far ``value`` lies outside ``spec``'s bounds beyond :func:`quantity_tolerance`
+    (> 0: the bound is broken)."""
+    return max(spec.lower - value, value - spec.upper) - quantity_tolerance(value)
+
+
 class QuantityConstraint(Constraint):
     """``lower <= value <= upper`` of a quantity (``constraints: {QUANTITY: {...}}``): the
     NLP holds it at the quantity's epigraph, which bounds every tracked extreme
@@ -245,7 +257,7 @@ class QuantityConstraint(Constraint):
 
     def tolerance(self, m):
         """Relative to the value: the NLP holds the bound to IPOPT's tolerance."""
-        return TOL_QUANTITY_REL * max(1.0, abs(float(self.value(m))))
+        return quantity_tolerance(self.value(m))
 
 
 class SectionConstraint(Constraint):

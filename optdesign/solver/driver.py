@@ -24,8 +24,9 @@ from optdesign.evaluation.regulation import quantities_over_range
 from optdesign.evaluation.sensitivity import sensitivity_record
 from optdesign.lifetime import die_with_parent
 from optdesign.quantities import design_quantities, get_quantity
-from optdesign.quantities.criteria import (LengthConstraint, TOL_QUANTITY_REL, constraints_of,
-                                           interval_quantities, objective_of, quantity_specs,
+from optdesign.quantities.criteria import (LengthConstraint, bound_excess, constraints_of,
+                                           interval_quantities, objective_of,
+                                           quantity_specs, quantity_tolerance,
                                            searched_quantities)
 from optdesign.solver.accuracy import solve_accuracy
 from optdesign.solver.nlp import Held, PhaseNLP, SECONDARY_BUDGET, is_robust
@@ -587,11 +588,10 @@ def _quantities_wanted(problem, ev, held_es) -> list[tuple[float, float]]:
         q = get_quantity(name)
         sign = 1.0 if q.worst == "max" else -1.0
         seen = max(sign * q.exact(ev, x, problem.objective.ripple) for x in held_es)
-        tol = TOL_QUANTITY_REL * max(1.0, abs(value))
-        if not worst.interior(e) or sign * value <= seen + tol:
+        if not worst.interior(e) or sign * value <= seen + quantity_tolerance(value):
             continue
         spec = bounds.get(name)
-        breaks = spec is not None and (value > spec.upper + tol or value < spec.lower - tol)
+        breaks = spec is not None and bound_excess(spec, value) > 0
         if breaks or getattr(objective, "quantity", None) == name:
             out.append((e, worst.points.get(e, (np.inf,))[0]))
     return out

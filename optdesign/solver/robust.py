@@ -16,8 +16,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from optdesign.quantities.criteria import (LengthConstraint, Measured, TOL_ANGLE_DEG,
-                                           TOL_QUANTITY_REL, TOL_RATIO, constraints_of)
+from optdesign.quantities.criteria import (LengthConstraint, Measured, TOL_ANGLE_DEG, TOL_RATIO,
+                                           bound_excess, constraints_of)
 from optdesign.solver.nlp import Held, SCENARIO_SLOTS
 from optdesign.solver.verify import Verification
 from optdesign.tolerance.exact_part import exact_part
@@ -47,8 +47,7 @@ def broken_bound(problem, case) -> float:
     if not case.assembles:
         return math.inf
     spec = next(s for s in problem.constraints.quantities if s.key == case.quantity)
-    return max(spec.lower - case.value, case.value - spec.upper) - \
-        TOL_QUANTITY_REL * max(1.0, abs(case.value))
+    return bound_excess(spec, case.value)
 
 
 def next_scenarios(problem, held: Held, worst_cases, bound: float | None = None,

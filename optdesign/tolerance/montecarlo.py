@@ -54,14 +54,20 @@ def monte_carlo(problem, lengths: Mapping[str, float] | None = None, tolerances=
     return frame
 
 
-def evaluate_offsets(problem, box, offsets: np.ndarray, nominal: dict | None = None):
+def evaluate_offsets(problem, box, offsets: np.ndarray, nominal: dict | None = None,
+                     memo: dict | None = None):
     """(figures of every part, the nominal's exact figures): the vectorised evaluation of
-    the parts ``box.nominal + offsets``, calibrated on the nominal design."""
+    the parts ``box.nominal + offsets``, calibrated on the nominal design. ``memo``: a dict
+    kept by a caller that evaluates the same box again, where the nominal's samples (the
+    calibration's reference) are kept after the first call."""
     count = int(round(box.values[problem.model.count_variable]))
     nominal = nominal or exact_part(problem, box.values)
     N = grid_size(problem, count)
     raw = sampled_parts(problem, count, box.nominal + offsets, N)
-    base = sampled_parts(problem, count, box.nominal[None, :], N)
+    memo = {} if memo is None else memo
+    if "nominal_sampled" not in memo:
+        memo["nominal_sampled"] = sampled_parts(problem, count, box.nominal[None, :], N)
+    base = memo["nominal_sampled"]
     fixed = calibrated(raw, base, nominal)
     return {"delta": fixed["delta"], "ratio": fixed["ratio"],
             "mu_min_deg": fixed["mu_min_deg"], "assembles": fixed["assembles"],

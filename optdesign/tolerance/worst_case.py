@@ -109,8 +109,9 @@ class _Search:
     """The exact figure of the box point u ∈ [-1, 1]^d, to maximise (g = δ, g = −μ, or a
     bound's quantity with the sign that makes larger worse)."""
 
-    def __init__(self, problem, box: Box, quantity: str):
+    def __init__(self, problem, box: Box, quantity: str, memo: dict):
         self.problem, self.box, self.quantity = problem, box, quantity
+        self.memo = memo
         self.sign = _worse(problem, quantity)
         self.dims = box.toleranced
         self.evaluations = 0
@@ -150,23 +151,29 @@ class _Search:
 
 def worst_case(problem, lengths: Mapping[str, float] | None, tolerances, *,
                quantity: str = "ripple", candidates: np.ndarray | None = None,
-               local_starts: int = LOCAL_STARTS, seed: int = 0) -> WorstCase:
+               local_starts: int = LOCAL_STARTS, seed: int = 0,
+               shared: dict | None = None) -> WorstCase:
     """The largest δ (or least transmission angle, or the worst of the quantity of the
     problem's bound keyed ``quantity``) over the tolerance box around ``lengths`` (design
     keys; missing ones at the problem's values).
 
     ``tolerances``: a :class:`~optdesign.tolerance.section.ToleranceSection` or
     ``{length: ± mm}``. ``candidates``: offsets (parts × the mechanism's lengths, mm), e.g.
-    a Monte Carlo sample, whose worst parts are starts too.
+    a Monte Carlo sample, whose worst parts are starts too. ``shared``: a dict the caller
+    passes to every search of one design's box (one per quantity), so that the nominal's
+    figures and the start pool's vectorised figures are computed once for them all; the
+    results are the same as without it.
     """
     bounded = [s.key for s in problem.constraints.quantities]
     if quantity not in QUANTITIES + tuple(bounded):
         raise ValueError(f"quantity must be one of {', '.join(QUANTITIES + tuple(bounded))} "
                          f"(got {quantity!r})")
     box = box_of(problem, lengths, tolerances)
-    search = _Search(problem, box, quantity)
+    search = _Search(problem, box, quantity, {} if shared is None else shared)
     d = search.dims.size
-    nominal = exact_part(problem, box.values)
+    if "nominal" not in search.memo:
+        search.memo["nominal"] = exact_part(problem, box.values)
+    nominal = search.memo["nominal"]
     search.evaluations += 1
     folded = np.inf * search.sign if quantity != "transmission_angle" else 0.0
     nominal_value = _figure(nominal, quantity) if nominal["assembles"] else folded
@@ -219,6 +226,26 @@ def _result(search, box, u, assembles, value, nominal, starts) -> WorstCase:
 def _starts(problem, box, search, nominal, candidates, seed) -> list[tuple[float, np.ndarray]]:
     """(score on the vectorised evaluator, u) of every start, best first."""
     d = search.dims.size
+    U = _pool(box, search, candidates, seed)
+    figures = _pool_figures(problem, box, search, nominal, U, candidates is None, seed)
+    scores = _score(search, figures)
+    slope = scores[-2 * d:-d] - scores[-d:]
+    corner = np.where(slope >= 0, 1.0, -1.0)
+    U, scores = U[:-2 * d], scores[:-2 * d]
+    U = np.vstack([U, corner])
+    scores = np.append(scores, _scores(problem, box, search, nominal, corner[None, :]))
+    broken = np.isnan(scores)
+    for u in U[broken][:8]:              # the fast evaluator says it fails: check exactly
+        search.value(u)
+    order = np.argsort(-np.where(broken, -np.inf, scores), kind="stable")
+    return [(float(scores[i]), U[i]) for i in order if not broken[i]]
+
+
+def _pool(box, search, candidates, seed) -> np.ndarray:
+    """The unit points of the starts: the nominal, every corner (or a sample of them), the
+    ``candidates`` or :data:`START_PARTS` uniform parts, and last the 2d probes of a central
+    difference at the nominal (the corner the gradient points to)."""
+    d = search.dims.size
     band = box.band[search.dims]
     pool = [np.zeros(d)]
     if d <= int(np.log2(MAX_CORNERS)):
@@ -233,29 +260,50 @@ def _starts(problem, box, search, nominal, candidates, seed) -> list[tuple[float
     else:
         picked = np.asarray(candidates, dtype=float)[:, search.dims] / band
         pool += list(np.clip(picked, -1.0, 1.0))
-    # the corner the gradient at the nominal points to (central differences, vectorised)
     h = 1e-3
     probe = np.vstack([h * np.eye(d), -h * np.eye(d)])
-    U = np.vstack(pool + list(probe))
-    scores = _scores(problem, box, search, nominal, U)
-    slope = scores[-2 * d:-d] - scores[-d:]
-    corner = np.where(slope >= 0, 1.0, -1.0)
-    U, scores = U[:-2 * d], scores[:-2 * d]
-    U = np.vstack([U, corner])
-    scores = np.append(scores, _scores(problem, box, search, nominal, corner[None, :]))
-    broken = np.isnan(scores)
-    for u in U[broken][:8]:              # the fast evaluator says it fails: check exactly
-        search.value(u)
-    order = np.argsort(-np.where(broken, -np.inf, scores), kind="stable")
-    return [(float(scores[i]), U[i]) for i in order if not broken[i]]
+    return np.vstack(pool + list(probe))
+
+
+def _pool_figures(problem, box, search, nominal, U, uniform: bool, seed) -> dict:
+    """The vectorised figures of the start pool ``U``; a ``uniform`` pool (no candidates) is
+    the same for every quantity, and is evaluated once per memo."""
+    if not uniform:
+        return _figures(problem, box, search, nominal, U)
+    key = ("start_pool", seed, search.dims.size)
+    if key not in search.memo:
+        search.memo[key] = _figures(problem, box, search, nominal, U)
+    return search.memo[key]
+
+
+def prime(problem, lengths: Mapping[str, float] | None, tolerances, shared: dict,
+          seed: int = 0) -> None:
+    """Fill ``shared`` (:func:`worst_case`'s memo) with the box's nominal and its uniform start
+    pool, so that searches run apart afterwards (in forked processes) find them done."""
+    box = box_of(problem, lengths, tolerances)
+    search = _Search(problem, box, "ripple", shared)
+    if "nominal" not in shared:
+        shared["nominal"] = exact_part(problem, box.values)
+    if search.dims.size and shared["nominal"]["assembles"]:
+        _pool_figures(problem, box, search, shared["nominal"],
+                      _pool(box, search, None, seed), True, seed)
 
 
 def _scores(problem, box, search, nominal, U) -> np.ndarray:
     """g of every unit point (rows of U) on the vectorised evaluator; NaN where a part does
     not assemble."""
+    return _score(search, _figures(problem, box, search, nominal, U))
+
+
+def _figures(problem, box, search, nominal, U) -> dict:
+    """The vectorised evaluator's figures of every unit point (rows of U)."""
     offsets = np.zeros((U.shape[0], box.band.size))
     offsets[:, search.dims] = U * box.band[search.dims]
-    figures, _ = evaluate_offsets(problem, box, offsets, nominal)
+    return evaluate_offsets(problem, box, offsets, nominal, memo=search.memo)[0]
+
+
+def _score(search, figures: dict) -> np.ndarray:
+    """g of the parts of ``figures``; NaN where a part does not assemble."""
     g = figures["delta"] if search.quantity == "ripple" else -figures["mu_min_deg"]
     return np.where(figures["assembles"], g, np.nan)
 

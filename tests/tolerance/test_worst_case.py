@@ -77,7 +77,7 @@ def test_an_interior_worst_point_is_found(monkeypatch, paper_problem):
         return {"assembles": True, "delta": float(surface(u)), "mu_min_deg": 50.0,
                 "ratio": 0.3, "delta_per_e": [float(surface(u))]}
 
-    def fake_offsets(problem, box, offsets, nominal=None):
+    def fake_offsets(problem, box, offsets, nominal=None, memo=None):
         u = offsets / 0.05
         return {"delta": surface(u), "ratio": np.full(len(u), 0.3),
                 "mu_min_deg": np.full(len(u), 50.0), "assembles": np.ones(len(u), bool)}, \

@@ -46,6 +46,7 @@ docs-quick: $(STAMP)
 	PYTHONPATH=. $(PY) benchmarks/dynamics_stiffness.py --damping 0 --turns 1 \
 		--stiffness 1e2,1e4,1e5,1e6 --name dynamics_methods_undamped
 	$(PY) benchmarks/dynamics_paper_case.py
+	$(PY) benchmarks/robust_cost.py
 	$(PY) benchmarks/docs.py --splice
 
 clean:

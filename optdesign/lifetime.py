@@ -106,3 +106,44 @@ def exit_on_sigterm():
     finally:
         signal.signal(signal.SIGTERM, previous)
     raise_if_terminated()
+
+
+def beside(fn, *args):
+    """Start ``fn(*args)`` in a forked child (that dies with this process) and return a
+    function that waits for its value: the child's, or its error raised again here; if the
+    child is lost without a word (killed), or no child can be forked, ``fn(*args)`` is
+    computed in this process when the value is asked for. The child inherits this process's
+    memory, so what was computed before the fork is not computed again."""
+    import multiprocessing as mp
+
+    try:
+        ctx = mp.get_context("fork")
+        receive, send = ctx.Pipe(duplex=False)
+        child = ctx.Process(target=_answer, args=(send, os.getpid(), fn, args))
+        child.start()
+    except (ValueError, OSError, AssertionError):  # no fork here, or a daemon's child
+        return lambda: fn(*args)
+    send.close()
+
+    def wait():
+        try:
+            kind, value = receive.recv()
+        except (EOFError, OSError):
+            kind, value = "lost", None
+        finally:
+            receive.close()
+            child.join()
+        if kind == "error":
+            raise value
+        return value if kind == "value" else fn(*args)
+    return wait
+
+
+def _answer(send, parent_pid: int, fn, args) -> None:
+    die_with_parent(parent_pid)
+    try:
+        send.send(("value", fn(*args)))
+    except BaseException as error:      # noqa: BLE001 - handed to the parent as it is
+        send.send(("error", error))
+    finally:
+        send.close()

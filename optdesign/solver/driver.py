@@ -32,7 +32,8 @@ from optdesign.solver.accuracy import solve_accuracy
 from optdesign.solver.nlp import Held, PhaseNLP, SECONDARY_BUDGET, is_robust
 from optdesign.solver.reachable import reach_of
 from optdesign.solver.result import PhaseResult, SolveResult, StartRecord
-from optdesign.solver.robust import next_scenarios, robust_verdict, worst_cases
+from optdesign.solver.robust import (next_scenarios, robust_verdict, screened_cases,
+                                     worst_cases)
 from optdesign.solver.screening import line_seeds, screen
 from optdesign.solver.verify import TOL_ANGLE_DEG, Verification, start_guess, verify
 
@@ -109,6 +110,9 @@ class PhaseSolver:
         self._nlps: dict[int, PhaseNLP] = {}
         #: optima found already: a run that reaches one of them is stopped (its basin is known)
         self.avoid: list[dict] = []
+        self._nominal: PhaseSolver | None = None       # a robust problem's nominal solver
+        #: a robust solve's tolerance analyses search δ and the rest in two processes
+        self.checks_in_parallel = False
 
     def nlp(self, sequences) -> PhaseNLP:
         """The NLP with enough hand-over slots for ``sequences`` (built at most once)."""
@@ -121,6 +125,15 @@ class PhaseSolver:
             nlp = PhaseNLP(self.problem, self.count, max(need, curves))
         self._nlps[nlp.slots] = nlp
         return nlp
+
+    def nominal_solver(self) -> "PhaseSolver":
+        """The solver of this robust problem's nominal problem (the design alone, not its
+        box), kept with its NLPs; its stage times start afresh on each call."""
+        if self._nominal is None:
+            plain = replace(self.problem.objective, robust="none")
+            self._nominal = PhaseSolver(replace(self.problem, objective=plain), self.count)
+        self._nominal.timings = Timings()
+        return self._nominal
 
     def verify(self, problem, values, held: Held | None = None,
                search: bool = True) -> Verification:
@@ -144,9 +157,9 @@ class PhaseSolver:
         start, t0 = dict(values), time.perf_counter()
         robust = is_robust(problem)
         if robust and ver.sequences and not any(ver.held.scenario_active):
-            # the nominal and the start's worst parts (tolerance analysis) to begin with
-            cases, corners = self.worst_cases(problem, values)
-            seeded = next_scenarios(problem, ver.held, cases, None, corners)
+            # the nominal and the start's worst corners (screened on the lanes) to begin with
+            cases, corners, spare = self.screened_cases(problem, values)
+            seeded = next_scenarios(problem, ver.held, cases, None, corners, fill=spare)
             ver = self.verify(problem, values, seeded, search=False)
         held = ver.held
         # The NLP holds the worst transmission angle at exact points: no margin to start with;
@@ -209,9 +222,15 @@ class PhaseSolver:
                 continue        # hand-overs changed order, or an angle ran to its window
             if robust:
                 # the tolerance box's worst parts of this optimum: a part rougher than the
-                # bound t, or one that breaks the angle, becomes a scenario; re-solve
-                ver.worst_cases, ver.corners = self.worst_cases(problem, values)
-                grown = next_scenarios(problem, held, ver.worst_cases, surrogate, ver.corners)
+                # bound t, or one that breaks the angle, becomes a scenario; re-solve. The
+                # corners screened on the lanes first; where they bring nothing new, the
+                # tolerance analysis (which certifies the optimum)
+                cases, corners, _ = self.screened_cases(problem, values)
+                grown = next_scenarios(problem, held, cases, surrogate, corners)
+                if grown == held:
+                    ver.worst_cases, ver.corners = self.worst_cases(problem, values)
+                    grown = next_scenarios(problem, held, ver.worst_cases, surrogate,
+                                           ver.corners)
                 if grown != held and robust_steps < MAX_ROBUST_STEPS:
                     robust_steps += 1
                     refinements -= 1
@@ -257,7 +276,12 @@ class PhaseSolver:
     def worst_cases(self, problem, values) -> tuple:
         """The tolerance analysis of ``values`` (:func:`optdesign.solver.robust.worst_cases`)."""
         with self.timings.stage("verification"):
-            return worst_cases(problem, values)
+            return worst_cases(problem, values, self.checks_in_parallel)
+
+    def screened_cases(self, problem, values) -> tuple:
+        """The box's corners screened (:func:`optdesign.solver.robust.screened_cases`)."""
+        with self.timings.stage("verification"):
+            return screened_cases(problem, values)
 
     def _ipopt(self, problem, ver: Verification, tightening: float, hessian: str,
                budget: int | None = None) -> "_Run":
@@ -450,13 +474,20 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
     if workers is None:
         workers = 1 if solver is not None else workers_for(problem)
     solver = solver or PhaseSolver(problem, count)
-    with solver.timings.stage("screening"):
-        screening = screen(problem, count, problem.solver.screen, extra=list(neighbours))
+    robust = is_robust(problem)
+    # a robust solve screens and polishes the nominal problem first (_from_nominal_optima)
+    basins = solver.nominal_solver() if robust else solver
+    with basins.timings.stage("screening"):
+        screening = screen(basins.problem, count, problem.solver.screen,
+                           extra=list(neighbours))
     result = PhaseResult(count, "failed", screening=screening.to_dict())
-    work = _Polishing(problem, count, solver, result, workers)
+    work = _Polishing(basins.problem, count, basins, result, workers)
     work.basins(screening.seeds)
     work.lines()
     result.screening |= {"polished": work.polished, "distinct_optima": len(work.optima)}
+    if robust:
+        solver.checks_in_parallel = workers > 1
+        work = _from_nominal_optima(problem, count, solver, work, screening.seeds)
     result.timings = solver.timings.to_dict()
     if work.best is not None:
         return _fill(result, problem, work.best)
@@ -469,6 +500,32 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
     if explain:
         _explain(problem, count, result)
     return result
+
+
+def _from_nominal_optima(problem, count: int, solver: PhaseSolver, nominal: "_Polishing",
+                         seeds) -> "_Polishing":
+    """The robust polishes of one count, from the optima of its nominal problem (``nominal``,
+    screened and polished as any solve), best first, each held at its box's worst corners
+    from the start (:meth:`PhaseSolver.solve_from`). An optimum whose nominal δ is not below
+    the best worst δ found is not polished: a design's worst δ over its box is at least its
+    own δ, which in that basin is at least the basin's nominal optimum. Where no nominal
+    optimum leads to a robust one, the nominal problem's seeds are polished robustly (the
+    box may need a basin the nominal problem leaves); without a nominal optimum there is no
+    robust one (every part's constraints hold the nominal's too). ``result.starts`` holds the
+    nominal polishes (``screening.polished`` of them) and then the robust ones
+    (``screening.robust_polished``); the iterations and stage times count both."""
+    result = nominal.result
+    solver.timings.add(nominal.solver.timings)
+    work = _Polishing(problem, count, solver, result)
+    for optimum in sorted(nominal.optima, key=lambda o: o.verification.key):
+        if work.best is not None and \
+                optimum.verification.key >= work.best.verification.key:
+            break
+        work.polish(optimum.values)
+    if work.best is None and nominal.optima:
+        work.basins(seeds)
+    result.screening |= {"robust_polished": work.polished}
+    return work
 
 
 def _explain(problem, count: int, result: PhaseResult) -> None:

@@ -16,29 +16,101 @@ from dataclasses import replace
 
 import numpy as np
 
+from optdesign.lifetime import beside
 from optdesign.quantities.criteria import (LengthConstraint, Measured, TOL_ANGLE_DEG, TOL_RATIO,
                                            bound_excess, constraints_of)
 from optdesign.solver.nlp import Held, SCENARIO_SLOTS
 from optdesign.solver.verify import Verification
 from optdesign.tolerance.exact_part import exact_part
+from optdesign.tolerance.montecarlo import evaluate_offsets
 from optdesign.tolerance.parts import box_of
-from optdesign.tolerance.worst_case import worst_case
+from optdesign.tolerance.worst_case import WorstCase, prime, worst_case
 
 #: a robust solve ends when the tolerance box's worst δ exceeds the NLP's bound t by less
 ROBUST_TOL = 1e-6
 #: the corners of a box of at most this many toleranced lengths are all checked
 MAX_CORNER_DIMS = 8
+#: a corner whose screened ratio lies this close to the floor is measured exactly (the
+#: vectorised evaluator's ratio is within 1e-8 of the exact one over a tolerance box)
+RATIO_SCREEN_MARGIN = 1e-6
 
 
-def worst_cases(problem, values) -> tuple:
+def worst_cases(problem, values, in_parallel: bool = False) -> tuple:
     """The tolerance analysis of ``values``: the worst part for δ, for the transmission
     angle and for each bound on a quantity, by its key
     (:func:`optdesign.tolerance.worst_case.worst_case`), and the box's corners that break a
-    constraint on the lengths or the ratio floor (:func:`corner_violations`)."""
+    constraint on the lengths or the ratio floor (:func:`corner_violations`).
+
+    The box's nominal and start pool are evaluated once for every search; ``in_parallel``:
+    the searches after δ's run in a forked child beside it (two cores; the same results)."""
     tolerances = problem.sections["tolerances"]
     keys = ("ripple", "transmission_angle") + tuple(s.key for s in problem.constraints.quantities)
-    return tuple(worst_case(problem, values, tolerances, quantity=q) for q in keys), \
-        corner_violations(problem, values)
+    shared: dict = {}
+
+    def search(names):
+        return [worst_case(problem, values, tolerances, quantity=q, shared=shared)
+                for q in names]
+    if not in_parallel:
+        return tuple(search(keys)), corner_violations(problem, values, shared)
+    prime(problem, values, tolerances, shared)
+    others = beside(search, keys[1:])
+    ripple = search(keys[:1])
+    corners = corner_violations(problem, values, shared)
+    return tuple(ripple + others()), corners
+
+
+def screened_cases(problem, values) -> tuple:
+    """A first look at the tolerance box of ``values``, cheaper than :func:`worst_cases` and
+    in the same form: every corner ranked on the vectorised evaluator
+    (:func:`~optdesign.tolerance.montecarlo.evaluate_offsets`), the corner of the largest δ
+    and the one of the least transmission angle each measured exactly, and the corners that
+    break a constraint on the lengths or the ratio floor (:func:`corner_violations`). The
+    worst parts of a smooth δ and μ over so small a box are mostly corners; the full analysis
+    certifies the optimum where this look finds nothing new. Third, the runners-up: the other
+    corners, the roughest and the least angled in turn, each apart from those before it in
+    two lengths or more (offsets, mm), to fill the slots a first solve leaves free. A box of
+    more than :data:`MAX_CORNER_DIMS` toleranced lengths gets the full analysis (and no
+    runners-up)."""
+    box = box_of(problem, values, problem.sections["tolerances"])
+    dims = box.toleranced
+    if dims.size > MAX_CORNER_DIMS:
+        return (*worst_cases(problem, values), [])
+    memo: dict = {}
+    corners = _corners(box)
+    figures, nominal = evaluate_offsets(problem, box, corners, memo=memo)
+    memo["nominal"] = nominal
+    fine = figures["assembles"]
+    picks = (("ripple", int(np.argmax(np.where(fine, figures["delta"], np.inf))), "delta"),
+             ("transmission_angle",
+              int(np.argmin(np.where(fine, figures["mu_min_deg"], -np.inf))), "mu_min_deg"))
+    cases = []
+    for quantity, i, key in picks:
+        part = box.part(corners[i])
+        exact = exact_part(problem, part)
+        folded = math.inf if quantity == "ripple" else 0.0
+        cases.append(WorstCase(quantity, exact[key] if exact["assembles"] else folded,
+                               box.deviation(corners[i]),
+                               {k: float(v) for k, v in part.items()}, 1, exact["assembles"],
+                               nominal[key], on_corner=True, starts=len(corners)))
+    roughest = np.argsort(-np.where(fine, figures["delta"], np.inf), kind="stable")
+    least_angled = np.argsort(np.where(fine, figures["mu_min_deg"], -np.inf), kind="stable")
+    order = [i for pair in zip(roughest, least_angled) for i in pair]
+    signs = np.sign(corners[:, dims])
+    chosen = [picks[0][1], picks[1][1]]
+    for i in order:
+        if all(np.count_nonzero(signs[i] != signs[j]) >= 2 for j in chosen):
+            chosen.append(i)
+    runners_up = [tuple(float(v) for v in corners[i]) for i in chosen[2:]]
+    return tuple(cases), corner_violations(problem, values, memo), runners_up
+
+
+def _corners(box) -> np.ndarray:
+    """The offsets of every corner of ``box`` (2^d × the mechanism's lengths, mm)."""
+    dims = box.toleranced
+    corners = np.zeros((2 ** dims.size, box.band.size))
+    corners[:, dims] = np.array(list(itertools.product((-1.0, 1.0), repeat=dims.size))) * \
+        box.band[dims]
+    return corners
 
 
 def broken_bound(problem, case) -> float:
@@ -51,13 +123,14 @@ def broken_bound(problem, case) -> float:
 
 
 def next_scenarios(problem, held: Held, worst_cases, bound: float | None = None,
-                   corners: dict | None = None) -> Held:
+                   corners: dict | None = None, fill=()) -> Held:
     """The scenario slots after a tolerance analysis: the worst part for δ (when its δ
     exceeds the NLP's ``bound`` t by more than ROBUST_TOL, or always without one) and the worst
     part for the transmission angle (when it breaks the bound or does not assemble) are held,
     and so is the worst corner of each constraint that ``corners``
     (:func:`corner_violations`) finds broken; the oldest held part makes room when every slot
-    is in use (the part wanted least recently; one wanted again is kept)."""
+    is in use (the part wanted least recently; one wanted again is kept). The parts ``fill``
+    (offsets, mm) take the slots still free, in order."""
     wanted = []
     ripple, angle, *bounded = worst_cases
     if not ripple.assembles or bound is None or ripple.value > bound + ROBUST_TOL:
@@ -73,6 +146,10 @@ def next_scenarios(problem, held: Held, worst_cases, bound: float | None = None,
     for offsets in wanted:          # a part wanted again moves to the back of the queue
         kept = [o for o in kept if not np.allclose(offsets, o, rtol=0.0, atol=1e-9)]
         kept = (kept + [offsets])[-SCENARIO_SLOTS:]
+    for offsets in fill:
+        if len(kept) < SCENARIO_SLOTS and \
+                not any(np.allclose(offsets, o, rtol=0.0, atol=1e-9) for o in kept):
+            kept.append(tuple(offsets))
     zero = (0.0,) * len(names)
     pad = SCENARIO_SLOTS - len(kept)
     return replace(held, offsets=tuple(kept) + (zero,) * pad,
@@ -107,22 +184,30 @@ def robust_verdict(problem, values, ver: Verification) -> None:
         ver.feasible = False
 
 
-def corner_violations(problem, values) -> dict[str, tuple[float, tuple[float, ...]]]:
+def corner_violations(problem, values, memo: dict | None = None
+                      ) -> dict[str, tuple[float, tuple[float, ...]]]:
     """The constraints on the lengths and the ratio floor at every corner of the tolerance box
     (every toleranced length at ± its tolerance): {name: (largest violation, that corner's
     offsets)} of those broken.
     A constraint linear in the lengths is worst at a corner; the ratio is monotone in each
-    length over so small a box."""
-
+    length over so small a box. The ratio of every corner is screened on the vectorised
+    evaluator (:func:`~optdesign.tolerance.montecarlo.evaluate_offsets`, ``memo`` as there)
+    and measured exactly where the screen is within :data:`RATIO_SCREEN_MARGIN` of the floor
+    or fails."""
     box = box_of(problem, values, problem.sections["tolerances"])
     dims = box.toleranced
     if dims.size > MAX_CORNER_DIMS:
         return {}
     length_rules = [c for c in constraints_of(problem) if isinstance(c, LengthConstraint)]
+    corners = _corners(box)
+    near_floor = np.zeros(len(corners), dtype=bool)
+    if problem.objective.min_ratio > 0:
+        screened = evaluate_offsets(problem, box, corners, memo=memo,
+                                    nominal=(memo or {}).get("nominal"))[0]["ratio"]
+        near_floor = ~(screened >= problem.objective.min_ratio - TOL_RATIO +
+                       RATIO_SCREEN_MARGIN)
     out: dict[str, float] = {}
-    for signs in itertools.product((-1.0, 1.0), repeat=dims.size):
-        offsets = np.zeros(box.band.size)
-        offsets[dims] = np.array(signs) * box.band[dims]
+    for offsets, check_ratio in zip(corners, near_floor):
         part = box.part(offsets)
         lengths = {k: part[k] for k in problem.model.lengths}
         for rule in length_rules:
@@ -130,7 +215,7 @@ def corner_violations(problem, values) -> dict[str, tuple[float, tuple[float, ..
             amount = float(rule.violation(problem, m))
             if amount > rule.tolerance(m) and amount > out.get(rule.name, (-math.inf,))[0]:
                 out[rule.name] = (amount, tuple(offsets))
-        if problem.objective.min_ratio > 0:
+        if check_ratio:
             ratio = exact_part(problem, part)["ratio"]
             short = problem.objective.min_ratio - ratio
             short = short if math.isfinite(short) else math.inf

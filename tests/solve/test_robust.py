@@ -91,3 +91,39 @@ def test_without_robust_the_nlp_has_no_scenario():
     nlp = PhaseNLP(problem, 6)
     assert nlp.n_scenarios == 0 and not any(b.name.startswith("offsets_")
                                             for b in nlp.layout.p)
+
+
+def test_a_robust_solve_starts_from_the_nominal_optimum():
+    """The robust solve polishes the nominal problem first, then once from its optimum (held
+    at the box's worst corners from the first round), and its worst δ is the tolerance
+    analysis's, above the nominal optimum's δ."""
+    from dataclasses import replace
+
+    from optdesign.problem.loader import load_problem
+
+    problem = load_problem(ROOT / "problems" / "robust_fourbar.yaml")
+    plain = replace(problem, objective=replace(problem.objective, robust="none"))
+    nominal = solve_phase(plain, 4, workers=1)
+    robust = solve_phase(problem, 4, workers=1)
+    assert nominal.status == robust.status == "optimal"
+    assert robust.screening["polished"] == nominal.screening["polished"]
+    assert robust.screening["robust_polished"] == 1
+    assert len(robust.starts) == nominal.screening["polished"] + 1
+    start = robust.starts[-1].start
+    assert all(start[k] == pytest.approx(v, abs=1e-9) for k, v in nominal.design.items())
+    found = worst_case(problem, robust.design, problem.sections["tolerances"])
+    assert robust.worst_case_delta == pytest.approx(found.value, rel=1e-9)
+    assert robust.worst_case_delta > robust.delta >= nominal.delta - 1e-12
+    assert robust.worst_case_min_transmission_angle_deg >= 45.0 - 1e-3
+
+
+def test_the_tolerance_analysis_in_two_processes_is_the_one_in_one():
+    from optdesign.solver.robust import worst_cases
+
+    problem = _problem(robust="worst_case")
+    design = problem.start_values()
+    serial, corners = worst_cases(problem, design)
+    forked, corners_forked = worst_cases(problem, design, in_parallel=True)
+    assert [(c.quantity, c.value, c.deviation) for c in serial] == \
+        [(c.quantity, c.value, c.deviation) for c in forked]
+    assert corners == corners_forked

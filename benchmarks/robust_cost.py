@@ -107,7 +107,7 @@ def main() -> int:
              f"robust alternated, each in a fresh process) and the robust optimum checked by "
              f"the tolerance analysis of `optdesign tolerance`.", "",
              "| problem | nominal solve | robust solve | robust / nominal | IPOPT iterations "
-             "(nominal, robust) | nominal δ | robust: worst δ over the box | the tolerance "
+             "(nominal, robust: its nominal stage included) | nominal δ | robust: worst δ over the box | the tolerance "
              "analysis: worst δ | its least μ [°] (rule) |", "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         m, c = r["median_solve_s"], r["check"]

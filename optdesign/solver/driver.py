@@ -226,11 +226,12 @@ class PhaseSolver:
                 # corners screened on the lanes first; where they bring nothing new, the
                 # tolerance analysis (which certifies the optimum)
                 cases, corners, _ = self.screened_cases(problem, values)
-                grown = next_scenarios(problem, held, cases, surrogate, corners)
+                grown = next_scenarios(problem, held, cases, surrogate, corners,
+                                       binding=run.binding_parts)
                 if grown == held:
                     ver.worst_cases, ver.corners = self.worst_cases(problem, values)
                     grown = next_scenarios(problem, held, ver.worst_cases, surrogate,
-                                           ver.corners)
+                                           ver.corners, binding=run.binding_parts)
                 if grown != held and robust_steps < MAX_ROBUST_STEPS:
                     robust_steps += 1
                     refinements -= 1
@@ -308,6 +309,8 @@ class PhaseSolver:
                     iterations=int(stats["iter_count"]),
                     lengths=nlp.lengths_of(x), surrogate=nlp.worst_ripple(x, params, ver.held),
                     multiplier=nlp.multiplier(sol["lam_g"], "min_ratio"),
+                    binding_parts=nlp.binding_scenarios(sol["lam_g"], ver.held)
+                    if nlp.n_scenarios else (),
                     at_window=nlp.at_window_bound(x, lbx, ubx),
                     binding="" if joined else nlp.binding(np.array(sol["g"]).ravel(), lbg, ubg),
                     active=nlp.active_set(problem, x, sol["lam_x"], sol["lam_g"], lbx, ubx))
@@ -325,6 +328,7 @@ class _Run:
     at_window: bool
     binding: str
     active: list            # what binds at the solution, with d objective / d bound
+    binding_parts: tuple = ()   # a robust solve's held parts that bind (their offsets)
 
 
 class _Polishing:

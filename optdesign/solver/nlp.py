@@ -805,6 +805,22 @@ class PhaseNLP:
                         "sensitivity": float(-lam.sum() * per), "unit": unit})
         return sorted(out, key=lambda a: -abs(a["sensitivity"]))
 
+    def binding_scenarios(self, lam_g, held: Held, tol: float = 1e-7) -> tuple:
+        """The offsets of the held scenario parts that bind at IPOPT's solution: a row of
+        theirs carries a multiplier (a part that does not bind leaves its rows, equalities
+        included, without one)."""
+        lam = np.abs(np.asarray(lam_g).ravel())
+        held = self._held(held)
+        out = []
+        for j in range(self.n_scenarios):
+            if not held.scenario_active[j]:
+                continue
+            tag = scenario_tag(j)
+            rows = [b for b in self.layout.g if b.name.endswith((f"[{tag}]", f"_{tag}]"))]
+            if any(np.max(lam[b.slice], initial=0.0) > tol for b in rows):
+                out.append(held.offsets[j])
+        return tuple(out)
+
     def multiplier(self, lam_g, name: str) -> float:
         """d f*/d lower bound of block ``name`` (= -λ in CasADi's sign convention)."""
         return -float(np.asarray(lam_g).ravel()[self.layout.find(self.layout.g, name)][0])

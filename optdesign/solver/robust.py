@@ -123,14 +123,16 @@ def broken_bound(problem, case) -> float:
 
 
 def next_scenarios(problem, held: Held, worst_cases, bound: float | None = None,
-                   corners: dict | None = None, fill=()) -> Held:
+                   corners: dict | None = None, fill=(), binding=()) -> Held:
     """The scenario slots after a tolerance analysis: the worst part for δ (when its δ
     exceeds the NLP's ``bound`` t by more than ROBUST_TOL, or always without one) and the worst
     part for the transmission angle (when it breaks the bound or does not assemble) are held,
     and so is the worst corner of each constraint that ``corners``
-    (:func:`corner_violations`) finds broken; the oldest held part makes room when every slot
-    is in use (the part wanted least recently; one wanted again is kept). The parts ``fill``
-    (offsets, mm) take the slots still free, in order."""
+    (:func:`corner_violations`) finds broken. When every slot is in use, a held part that
+    does not bind (not in ``binding``: the offsets of the held parts whose rows carry a
+    multiplier at the last solution) makes room, the one wanted least recently first; the
+    oldest binding part only when every held part binds. The parts ``fill`` (offsets, mm)
+    take the slots still free, in order."""
     wanted = []
     ripple, angle, *bounded = worst_cases
     if not ripple.assembles or bound is None or ripple.value > bound + ROBUST_TOL:
@@ -143,17 +145,25 @@ def next_scenarios(problem, held: Held, worst_cases, bound: float | None = None,
     wanted = [tuple(float(case.deviation[k]) for k in names) for case in wanted]
     wanted += [offsets for _, offsets in (corners or {}).values()]
     kept = [o for o, a in zip(held.offsets, held.scenario_active) if a]
-    for offsets in wanted:          # a part wanted again moves to the back of the queue
-        kept = [o for o in kept if not np.allclose(offsets, o, rtol=0.0, atol=1e-9)]
-        kept = (kept + [offsets])[-SCENARIO_SLOTS:]
+    for n, offsets in enumerate(wanted):    # a part wanted again moves to the back
+        kept = [o for o in kept if not _same(offsets, o)] + [offsets]
+        if len(kept) > SCENARIO_SLOTS:
+            older = [o for o in kept if not any(_same(o, w) for w in wanted[:n + 1])]
+            idle = [o for o in older if not any(_same(o, b) for b in binding)]
+            drop = (idle or older or kept)[0]
+            kept = [o for o in kept if o is not drop]
     for offsets in fill:
-        if len(kept) < SCENARIO_SLOTS and \
-                not any(np.allclose(offsets, o, rtol=0.0, atol=1e-9) for o in kept):
+        if len(kept) < SCENARIO_SLOTS and not any(_same(offsets, o) for o in kept):
             kept.append(tuple(offsets))
     zero = (0.0,) * len(names)
     pad = SCENARIO_SLOTS - len(kept)
     return replace(held, offsets=tuple(kept) + (zero,) * pad,
                    scenario_active=(True,) * len(kept) + (False,) * pad)
+
+
+def _same(a, b) -> bool:
+    """Two parts' offsets are one part."""
+    return bool(np.allclose(a, b, rtol=0.0, atol=1e-9))
 
 
 def robust_verdict(problem, values, ver: Verification) -> None:

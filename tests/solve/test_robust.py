@@ -127,3 +127,25 @@ def test_the_tolerance_analysis_in_two_processes_is_the_one_in_one():
     assert [(c.quantity, c.value, c.deviation) for c in serial] == \
         [(c.quantity, c.value, c.deviation) for c in forked]
     assert corners == corners_forked
+
+
+def test_a_new_part_takes_the_slot_of_a_held_part_that_does_not_bind():
+    """Every slot held: the part wanted now replaces the oldest part that does not bind, and
+    the oldest part only when every held part binds."""
+    from optdesign.solver.nlp import Held
+    from optdesign.solver.robust import next_scenarios
+    from optdesign.tolerance.worst_case import WorstCase
+
+    problem = _problem(robust="worst_case")
+    names = problem.model.lengths
+    parts = [tuple(0.5 * (1 if (i >> k) & 1 else -1) for k in range(len(names)))
+             for i in range(5)]
+    held = Held(offsets=tuple(parts[:4]), scenario_active=(True,) * 4)
+
+    def case(quantity, value, offsets):
+        return WorstCase(quantity, value, dict(zip(names, offsets)), {}, 1)
+    rougher = [case("ripple", 0.2, parts[4]), case("transmission_angle", 30.0, parts[0])]
+    kept = next_scenarios(problem, held, rougher, bound=0.1, binding=(parts[0], parts[2]))
+    assert kept.offsets == (parts[0], parts[2], parts[3], parts[4])
+    every = next_scenarios(problem, held, rougher, bound=0.1, binding=tuple(parts[:4]))
+    assert every.offsets == (parts[1], parts[2], parts[3], parts[4])

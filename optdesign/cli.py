@@ -32,6 +32,7 @@ COMMANDS = [
     "optdesign.commands.export",
     "optdesign.commands.animate",
     "optdesign.commands.compare",
+    "optdesign.commands.atlas",
     "optdesign.commands.schema",
 ]
 

@@ -48,7 +48,8 @@ def test_each_unit_mistake_is_one_warning_line_and_the_command_goes_on(
         load_problem(path)
 
 
-@pytest.mark.parametrize("path", sorted((ROOT / "problems").glob("*.yaml")),
+@pytest.mark.parametrize("path", sorted(p for p in (ROOT / "problems").glob("*.yaml")
+                                         if not p.stem.startswith("atlas_")),
                          ids=lambda p: p.stem)
 def test_a_correct_file_is_silent_without_units(path):
     with warnings.catch_warnings():

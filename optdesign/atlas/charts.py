@@ -79,12 +79,16 @@ def plot_counts(result):
             label = None if y is None else f"{SHORT[y]} {value:g}"
             ax.plot(xs, ds, "o-", color=colour, label=label, ms=4)
             bad = np.isnan(ds)
-            if bad.any():
-                ax.plot(xs[bad], np.zeros(bad.sum()), "x", color=colour, ms=7, clip_on=False)
+            if bad.any():          # on the x axis, below the log scale's data
+                ax.plot(xs[bad], np.full(bad.sum(), 0.0), "x", color=colour, ms=7,
+                        clip_on=False, transform=ax.get_xaxis_transform())
         ax.set_title(panel_title(where), fontsize=10)
         ax.set_xlabel(LABELS[x])
         ax.grid(alpha=0.3)
-        ax.set_ylim(bottom=0)
+        ax.set_yscale("log")
+        ax.yaxis.set_major_formatter(pyplot().FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.yaxis.set_minor_formatter(pyplot().FuncFormatter(
+            lambda v, _: f"{v:g}" if str(round(v, 6))[-1] in "2345" else ""))
         if x == "phases":
             ax.set_xticks(spec.axes[x])
     axes[0].set_ylabel("least ripple δ")

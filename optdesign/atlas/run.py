@@ -9,6 +9,12 @@ time, and every cell is screened with the optima of its neighbours solved so far
 along any axis). Every cell shares the regulated length (1), so a neighbour's optimum needs
 no scaling to serve as a start; where it breaks the cell's rules the screening filters it out
 and the cell's own screening starts the solve.
+
+Repairs: a cell's solve is global by screening, not by proof, and two neighbours can end in
+different basins. Along a floor axis (transmission angle, pin radius, ratio) the looser cell's
+least δ is at most its stricter neighbour's; where the atlas says otherwise, the looser cell is
+solved again with that neighbour's optimum among its starts (at most MAX_REPAIR_ROUNDS rounds)
+and keeps the better verified optimum.
 """
 from __future__ import annotations
 
@@ -32,6 +38,12 @@ RESUME_REL = 1e-9
 #: cells in flight per worker: few, so that a cell submitted later sees its neighbours solved
 IN_FLIGHT_PER_WORKER = 2
 JOURNAL = "cells.jsonl"
+#: the rules a stricter value only narrows: a design that meets the stricter value meets the
+#: looser, so a cell's least δ is at most that of its neighbour with the stricter value
+FLOORS = ("min_transmission_angle_deg", "min_pin_radius", "min_ratio")
+#: a looser cell's δ above its stricter neighbour's by more than this (relative) is repaired
+REPAIR_TOL = 1e-7
+MAX_REPAIR_ROUNDS = 3
 
 
 @dataclass
@@ -115,14 +127,17 @@ class _Run:
         self.journal = Journal(out / JOURNAL)
         self.done: dict[int, dict] = {}
         for rec in self.journal.start(settings_of(spec), resume):
-            self.done[_checked_index(rec, self.cells, self.journal)] = rec
+            index = _checked_index(rec, self.cells, self.journal)
+            self.done[index] = better(self.done.get(index), rec)
         _reverify(spec, self.cells, self.done, self.journal)
         self.n_resumed = len(self.done)
         self.ex = _executor(workers, scheduler)
         self.n_workers = _n_workers(self.ex, workers)
         self.limit = max(2, IN_FLIGHT_PER_WORKER * self.n_workers)
         self.chains = chains(spec)
-        self.running: dict = {}              # future -> chain number
+        self.running: dict = {}              # future -> chain number, or "repair"
+        self.tried: set = set()              # (cell, neighbour cell) repairs already run
+        self.n_repairs = 0
         from tqdm import tqdm
         self.bar = tqdm(total=len(self.cells), initial=self.n_resumed, desc="atlas",
                         unit="cell", file=sys.stderr, disable=None if progress else True,
@@ -131,13 +146,16 @@ class _Run:
     def run(self) -> AtlasResult:
         interrupted = True
         try:
-            self.fill()
-            while self.running:
-                raise_if_terminated()
-                for fut in self.ex.wait_any(list(self.running)):
-                    self.running.pop(fut)
-                    self.finish(fut.result())
+            for round_ in range(MAX_REPAIR_ROUNDS + 1):
+                if round_ and not self.repair(round_):
+                    break
                 self.fill()
+                while self.running:
+                    raise_if_terminated()
+                    for fut in self.ex.wait_any(list(self.running)):
+                        self.running.pop(fut)
+                        self.finish(fut.result())
+                    self.fill()
             interrupted = False
         finally:
             self.bar.close()
@@ -146,6 +164,7 @@ class _Run:
         return AtlasResult(self.spec, records, run={
             "wall_time_s": time.perf_counter() - self.t0, "cells": len(self.cells),
             "resumed_cells": self.n_resumed, "chain_axis": chain_axis(self.spec),
+            "repairs": self.n_repairs,
             "workers": "dask" if self.scheduler is not None else self.n_workers})
 
     def fill(self) -> None:
@@ -165,11 +184,61 @@ class _Run:
                                  self.spec.values_of(cell), neighbours_of(cell, by_position))
             self.running[fut] = j
 
+    def repair(self, round_: int) -> int:
+        """Submit this round's repairs (:func:`looser_than_stricter`); how many."""
+        todo = [(i, nb) for i, nb in looser_than_stricter(self.spec, self.cells, self.done)
+                if (i, nb["cell"]) not in self.tried]
+        by_position = {self.cells[i].position: r for i, r in self.done.items()}
+        for index, nb in todo:
+            self.tried.add((index, nb["cell"]))
+            cell = self.cells[index]
+            starts = [nb["design"]] + [d for d in neighbours_of(cell, by_position)
+                                       if d != nb["design"]]
+            fut = self.ex.submit(solve_cell, self.spec.problem(cell), index,
+                                 self.spec.values_of(cell), starts, round_)
+            self.running[fut] = "repair"
+        self.n_repairs += len(todo)
+        self.bar.total += len(todo)
+        self.bar.refresh()
+        return len(todo)
+
     def finish(self, rec: dict) -> None:
         rec["finished_s"] = time.perf_counter() - self.t0
-        self.done[rec["cell"]] = rec
+        self.done[rec["cell"]] = better(self.done.get(rec["cell"]), rec)
         self.journal.append(rec)
         self.bar.update(1)
+
+
+def better(old: dict | None, new: dict) -> dict:
+    """The record of a cell to keep: ``new`` unless ``old`` is a verified optimum that
+    ``new`` does not improve (a repair that found nothing better leaves the cell as it was)."""
+    if old is None or not old["feasible"]:
+        return new if new["feasible"] or old is None else old
+    return new if new["feasible"] and new["delta"] < old["delta"] else old
+
+
+def looser_than_stricter(spec: AtlasSpec, cells: list[Cell], done: dict) -> list:
+    """(cell index, the neighbour's record) for every solved cell whose δ is worse than that
+    of a neighbour one step stricter along a floor axis (:data:`FLOORS`), or which has no
+    optimum where that neighbour has one; the best such neighbour per cell."""
+    by_position = {cells[i].position: r for i, r in done.items()}
+    found: dict = {}
+    for k, name in enumerate(spec.axes):
+        if name not in FLOORS:
+            continue
+        for index, rec in done.items():
+            for step in (-1, 1):
+                pos = list(cells[index].position)
+                pos[k] += step
+                nb = by_position.get(tuple(pos))
+                if nb is None or not nb["feasible"] or nb["values"][name] <= \
+                        rec["values"][name]:
+                    continue
+                worse = not rec["feasible"] or \
+                    nb["delta"] < rec["delta"] - REPAIR_TOL * max(1.0, rec["delta"])
+                if worse and (index not in found or nb["delta"] < found[index]["delta"]):
+                    found[index] = nb
+    return sorted(found.items())
 
 
 def _n_workers(ex, workers) -> int:

@@ -13,6 +13,9 @@ RELATIVE = "- (length / the regulated length {reg})"
 ATLAS_UNITS = {"cell": "- (the cell's index in the grid, the last axis fastest)",
                "neighbours": "- (count of solved neighbours screened as starts)",
                "starts": COUNT, "iterations": COUNT, "cells": COUNT, "resumed_cells": COUNT,
+               "repair": "- (the round of repairs that gave the cell's optimum; 0: its first "
+                         "solve)",
+               "repairs": "- (count of cells solved again from a stricter neighbour's optimum)",
                "phases": COUNT, "count": COUNT, "finished_s": "s (since the run started)"}
 
 
@@ -28,7 +31,7 @@ def columns(result) -> list[str]:
     spec = result.spec
     return (list(spec.axes) + ["status", "delta", "ratio", "transmission_angle_deg"] +
             [k for k in spec.lengths] + ["pin_radius", "binding", "message", "time_s",
-                                         "neighbours"])
+                                         "neighbours", "repair"])
 
 
 def rows(result) -> list[dict]:
@@ -37,7 +40,7 @@ def rows(result) -> list[dict]:
     for rec in result.records:
         row = dict(rec["values"]) | {k: rec.get(k) for k in (
             "status", "delta", "ratio", "pin_radius", "binding", "message", "time_s",
-            "neighbours")}
+            "neighbours", "repair")}
         row["transmission_angle_deg"] = rec.get("min_transmission_angle_deg")
         row |= {k: rec["design"].get(k) for k in result.spec.lengths}
         out.append(row)

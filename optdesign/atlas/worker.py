@@ -11,7 +11,8 @@ from optdesign.fronts.worker import criteria_columns
 from optdesign.solver import solve_phase
 
 
-def solve_cell(problem, index: int, values: dict, neighbours: list[dict]) -> dict:
+def solve_cell(problem, index: int, values: dict, neighbours: list[dict],
+               repair: int = 0) -> dict:
     """Solve one cell; its record for the journal.
 
     Parameters
@@ -26,6 +27,9 @@ def solve_cell(problem, index: int, values: dict, neighbours: list[dict]) -> dic
         Optima of solved neighbouring cells: screened with the box (continuation along each
         axis); each ranks first when it meets this cell's rules, and is filtered out with
         the other screened designs when it does not.
+    repair : int
+        0 for the cell's first solve; k for its re-solve in the k-th round of repairs
+        (:func:`optdesign.atlas.run.looser_than_stricter`).
     """
     t0 = time.perf_counter()
     count = int(values["phases"])
@@ -35,8 +39,9 @@ def solve_cell(problem, index: int, values: dict, neighbours: list[dict]) -> dic
     if design:
         design[problem.model.count_variable] = count
     columns = criteria_columns(problem, design) if feasible else {}
-    binding = ([a["name"] for a in res.active] if feasible else
-               [res.binding] if res.binding else [])
+    # an infeasible cell names the rule out of reach where the solver measured it
+    rule = (res.reachable or {}).get("constraint") or res.binding
+    binding = [a["name"] for a in res.active] if feasible else [rule] if rule else []
     return {"key": [count, index], "count": count, "kind": "cell", "cell": index,
             "values": dict(values), "status": res.status, "feasible": feasible,
             "design": design, "delta": res.delta if feasible else None,
@@ -44,5 +49,5 @@ def solve_cell(problem, index: int, values: dict, neighbours: list[dict]) -> dic
             "min_transmission_angle_deg": res.min_transmission_angle_deg if feasible else None,
             **columns, "binding": "; ".join(binding), "message": res.message,
             "reachable": res.reachable or None, "iterations": res.iterations,
-            "starts": len(res.starts), "neighbours": len(neighbours),
+            "starts": len(res.starts), "neighbours": len(neighbours), "repair": repair,
             "time_s": time.perf_counter() - t0}

@@ -110,6 +110,7 @@ def plot_map(result):
     lo, hi = (min(feasible), max(feasible)) if feasible else (0.0, 1.0)
     fig, axes = _grid(len(groups))
     plt = pyplot()
+    from matplotlib.colors import LogNorm
     for ax, (where, recs) in zip(axes, groups):
         grid = np.full((len(ys), len(xs)), np.nan)
         for r in recs:
@@ -117,13 +118,13 @@ def plot_map(result):
             grid[i, xs.index(r["values"][x])] = r["delta"] if r["feasible"] else np.nan
         ax.add_patch(plt.Rectangle((-0.5, -0.5), len(xs), len(ys), facecolor="0.85",
                                    hatch="///", edgecolor="0.6", lw=0, zorder=0))
-        image = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis_r", vmin=lo,
-                          vmax=hi, extent=(-0.5, len(xs) - 0.5, -0.5, len(ys) - 0.5),
+        image = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis_r",
+                          norm=LogNorm(lo, hi), extent=(-0.5, len(xs) - 0.5, -0.5, len(ys) - 0.5),
                           zorder=1)
         if len(xs) * len(ys) <= 120:
             for i, j in itertools.product(range(len(ys)), range(len(xs))):
                 if np.isfinite(grid[i, j]):
-                    shade = (grid[i, j] - lo) / ((hi - lo) or 1)
+                    shade = np.log(grid[i, j] / lo) / np.log(hi / lo) if hi > lo else 0
                     ax.text(j, i, f"{grid[i, j]:.3f}"[1:], ha="center", va="center",
                             fontsize=7, color="white" if shade > 0.55 else "black", zorder=2)
         ax.set_xticks(range(len(xs)), [f"{v:g}" if not isinstance(v, str) else v for v in xs])
@@ -133,8 +134,8 @@ def plot_map(result):
         ax.set_title(panel_title(where), fontsize=10)
     if y is not None:
         axes[0].set_ylabel(LABELS[y])
-    fig.colorbar(image, ax=list(axes[:len(groups)]), label="least ripple δ (hatched: "
-                                                            "infeasible)", shrink=0.9)
+    fig.colorbar(image, ax=list(axes[:len(groups)]), label="least ripple δ, log scale "
+                                                            "(hatched: infeasible)", shrink=0.9)
     fig.suptitle(f"{spec.name}: least δ over {SHORT[x]} and {SHORT.get(y, '')}", fontsize=11)
     return fig
 

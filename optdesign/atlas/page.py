@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import html
 import json
+import math
 from pathlib import Path
 
 from optdesign.atlas.charts import LABELS, SHORT, layout, panel_title, panels
@@ -17,6 +18,14 @@ from optdesign.outputs.atomic import atomic_write_text
 #: viridis at five stops (reversed: small δ bright), for the cells' colours
 STOPS = ((253, 231, 37), (94, 201, 98), (33, 145, 140), (59, 82, 139), (68, 1, 84))
 CELL = 34          # px of a cell's side
+
+
+def shade(delta: float, lo: float, hi: float) -> float:
+    """Where ``delta`` lies between ``lo`` and ``hi`` on a log scale, in [0, 1] (the map's
+    colours: δ spans a factor of five or more over an atlas)."""
+    if hi <= lo or delta <= 0:
+        return 0.0
+    return math.log(delta / lo) / math.log(hi / lo)
 
 
 def colour(t: float) -> str:
@@ -58,9 +67,9 @@ def _panel_svg(spec, where: dict, recs: list[dict], lo: float, hi: float) -> str
         i = len(ys) - 1 - (ys.index(r["values"][y]) if y else 0)
         cx, cy = left + CELL * j, top + CELL * i
         if r["feasible"]:
-            fill = colour((r["delta"] - lo) / ((hi - lo) or 1.0))
+            fill = colour(shade(r["delta"], lo, hi))
             text = f"{r['delta']:.3f}"[1:]
-            ink = "#000" if (r["delta"] - lo) / ((hi - lo) or 1.0) < 0.5 else "#fff"
+            ink = "#000" if shade(r["delta"], lo, hi) < 0.5 else "#fff"
         else:
             fill, text, ink = "url(#hatch)", "×", "#555"
         parts.append(f'<rect class="cell" data-cell="{r["cell"]}" x="{cx}" y="{cy}" '
@@ -99,8 +108,9 @@ def page(result) -> str:
                        "relative_to": spec.regulated}, allow_nan=False)
     data = data.replace("</", "<\\/")
     fixed = ", ".join(f"{k} = {_fmt(v)}" for k, v in spec.fixed.items())
-    legend = "".join(f'<span style="background:{colour(t)}">&nbsp;{lo + t * (hi - lo):.3f}'
-                     f'&nbsp;</span>' for t in (0, 0.25, 0.5, 0.75, 1))
+    legend = "".join(f'<span style="background:{colour(t)};color:{"#000" if t < 0.5 else "#fff"}">'
+                     f'&nbsp;{lo * (hi / lo) ** t:.3f}&nbsp;</span>'
+                     for t in (0, 0.25, 0.5, 0.75, 1))
     return _TEMPLATE.format(title=html.escape(spec.name), name=html.escape(spec.name),
                             mechanism=html.escape(spec.mechanism), reg=spec.regulated,
                             fixed=html.escape(fixed), n=len(result.records),

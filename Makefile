@@ -47,6 +47,7 @@ docs-quick: $(STAMP)
 		--stiffness 1e2,1e4,1e5,1e6 --name dynamics_methods_undamped
 	$(PY) benchmarks/dynamics_paper_case.py
 	$(PY) benchmarks/robust_cost.py
+	$(PY) benchmarks/atlas_scaling.py
 	$(PY) benchmarks/docs.py --splice
 
 clean:

@@ -109,7 +109,7 @@ def main() -> int:
     lines = [f"Cells per second on a {n}-cell slice of `problems/atlas_fourbar.yaml` (n = 5–8 × "
              f"μ_min = 35–50°, ratio ≥ 0.3), each run from its first cell to its last "
              f"(repairs included), in this process.", "",
-             "| run | cells | wall [s] | cells/s | CPU per cell (mean) [s] | repairs |",
+             "| run | cells | wall [s] | cells/s | a cell's solve, mean [s] | repairs |",
              "|---|---|---|---|---|---|"]
     for label, wall, res in rows:
         cpu = statistics.mean(r["time_s"] for r in res.records)
@@ -120,10 +120,11 @@ def main() -> int:
               f"| {warm['cells']} | {warm['warm_s']:.1f} | {warm['cold_s']:.1f} | "
               f"{warm['cold_s'] / warm['warm_s']:.2f} | "
               f"{warm['max_delta_gap']:.1e} |" if warm["cells"] else "| 0 | - | - | - | - |"]
-    lines += ["", f"Projection of a {CELLS_PROJECTED}-cell atlas: {per_cell:.2f} s of CPU per "
+    lines += ["", f"Projection of a {CELLS_PROJECTED}-cell atlas: {per_cell:.2f} s per "
               f"cell (the mean over the shipped atlas, n = 3–12), {CORES_PER_MACHINE} cores a "
               f"machine, and the Dask scheduler's {overhead * 1e3:.2f} ms per task measured "
-              f"here (serial: it does not shrink with N); the projected wall time is the larger of the two, which overlap.", "",
+              f"here (serial: it does not shrink with N); the projected wall time is the "
+              f"larger of the two, which overlap.", "",
               "| machines N | cores | compute [s] | scheduler [s] | projected wall |",
               "|---|---|---|---|---|"]
     projection = []

@@ -163,21 +163,25 @@ function draw(d) {{
   let out = `<svg id="drawing" width="${{(x1 - x0) * s + 20}}" height="${{(y1 - y0) * s + 20}}">`;
   for (const [a, b, role] of d.links) {{
     const p = d.joints[a], q = d.joints[b];
-    out += `<line x1="${{X(p)}}" y1="${{Y(p)}}" x2="${{X(q)}}" y2="${{Y(q)}}" stroke="${{colours[role] || "#555"}}" stroke-width="${{role === "crank" ? 3 : 1.5}}"/>`;
+    out += `<line x1="${{X(p)}}" y1="${{Y(p)}}" x2="${{X(q)}}" y2="${{Y(q)}}" ` +
+      `stroke="${{colours[role] || "#555"}}" stroke-width="${{role === "crank" ? 3 : 1.5}}"/>`;
   }}
   for (const p of pts) out += `<circle cx="${{X(p)}}" cy="${{Y(p)}}" r="2.5" fill="#222"/>`;
   return out + "</svg>";
 }}
 function show(i) {{
   const c = atlas.cells[i];
-  let rows = Object.entries(c.values).map(([k, v]) => `<tr><td>${{esc(k)}}</td><td>${{esc(fmt(v, 4))}}</td></tr>`).join("");
-  rows += `<tr><td>status</td><td><b>${{esc(c.status)}}</b></td></tr>`;
-  rows += `<tr><td>δ</td><td>${{fmt(c.delta, 6)}}</td></tr><tr><td>ratio</td><td>${{fmt(c.ratio, 4)}}</td></tr>`;
-  rows += `<tr><td>least angle</td><td>${{fmt(c.angle, 2)}} deg</td></tr>`;
-  for (const [k, v] of Object.entries(c.design)) rows += `<tr><td>${{esc(k)}} / ${{atlas.relative_to}}</td><td>${{fmt(v, 4)}}</td></tr>`;
+  const row = (k, v) => `<tr><td>${{k}}</td><td>${{v}}</td></tr>`;
+  let rows = Object.entries(c.values).map(([k, v]) => row(esc(k), esc(fmt(v, 4)))).join("");
+  rows += row("status", `<b>${{esc(c.status)}}</b>`);
+  rows += row("δ", fmt(c.delta, 6)) + row("ratio", fmt(c.ratio, 4));
+  rows += row("least angle", `${{fmt(c.angle, 2)}} deg`);
+  for (const [k, v] of Object.entries(c.design))
+    rows += row(`${{esc(k)}} / ${{atlas.relative_to}}`, fmt(v, 4));
   rows += `<tr><td>binding</td><td>${{esc(c.binding || "-")}}</td></tr>`;
   const note = c.message ? `<p>${{esc(c.message)}}</p>` : "";
-  document.getElementById("info").innerHTML = `<h3>cell ${{i}}</h3><table>${{rows}}</table>${{note}}${{draw(c.drawing)}}`;
+  document.getElementById("info").innerHTML =
+    `<h3>cell ${{i}}</h3><table>${{rows}}</table>${{note}}${{draw(c.drawing)}}`;
 }}
 document.querySelectorAll("rect.cell").forEach(r =>
   r.addEventListener("mouseenter", () => show(r.dataset.cell)));

@@ -6,9 +6,10 @@ cell and ``--resume`` solves only the rest, to the same atlas.
 Continuation: the cells are walked in *chains* along one axis (the phase count when it is
 an axis: the optimum of n − 1 often lies in the best basin of n), one cell of a chain at a
 time, and every cell is screened with the optima of its neighbours solved so far (one step
-along any axis). Every cell shares the regulated length (1), so a neighbour's optimum needs
-no scaling to serve as a start; where it breaks the cell's rules the screening filters it out
-and the cell's own screening starts the solve.
+along any axis). A cell starts once a neighbour is solved, so the work spreads from the
+first cell along the chains and across them. Every cell shares the regulated length (1), so
+a neighbour's optimum needs no scaling to serve as a start; where it breaks the cell's rules
+the screening filters it out and the cell's own screening starts the solve.
 
 Repairs: a cell's solve is global by screening, not by proof, and two neighbours can end in
 different basins. Along a floor axis (transmission angle, pin radius, ratio) the looser cell's
@@ -73,17 +74,22 @@ def chains(spec: AtlasSpec) -> list[list[Cell]]:
     return [sorted(g, key=lambda c: c.position[k]) for g in groups.values()]
 
 
+def adjacent(position: tuple) -> list[tuple]:
+    """The positions one step from ``position`` along any axis (some may lie off the grid:
+    no cell is there)."""
+    out = []
+    for axis in range(len(position)):
+        for step in (-1, 1):
+            pos = list(position)
+            pos[axis] += step
+            out.append(tuple(pos))
+    return out
+
+
 def neighbours_of(cell: Cell, by_position: dict) -> list[dict]:
     """The optima of the solved feasible cells one step from ``cell`` along any axis."""
-    out = []
-    for axis in range(len(cell.position)):
-        for step in (-1, 1):
-            pos = list(cell.position)
-            pos[axis] += step
-            rec = by_position.get(tuple(pos))
-            if rec is not None and rec["feasible"]:
-                out.append(rec["design"])
-    return out
+    return [by_position[p]["design"] for p in adjacent(cell.position)
+            if p in by_position and by_position[p]["feasible"]]
 
 
 def settings_of(spec: AtlasSpec) -> dict:
@@ -168,9 +174,13 @@ class _Run:
             "workers": "dask" if self.scheduler is not None else self.n_workers})
 
     def fill(self) -> None:
-        """Submit the next unsolved cell of every chain with none in flight, in order, up
-        to the limit of cells in flight."""
+        """Submit the next unsolved cell of every chain with none in flight, up to the limit
+        of cells in flight. A cell waits until a neighbour is solved (so that it is screened
+        with that neighbour's optimum): the work spreads from the first cell along the
+        chains and across them; only when nothing is in flight does a cell start alone."""
         busy = set(self.running.values())
+        by_position = {self.cells[i].position: r for i, r in self.done.items()}
+        waiting = None
         for j, chain in enumerate(self.chains):
             if len(self.running) >= self.limit:
                 return
@@ -179,10 +189,17 @@ class _Run:
             cell = next((c for c in chain if c.index not in self.done), None)
             if cell is None:
                 continue
-            by_position = {self.cells[i].position: r for i, r in self.done.items()}
-            fut = self.ex.submit(solve_cell, self.spec.problem(cell), cell.index,
-                                 self.spec.values_of(cell), neighbours_of(cell, by_position))
-            self.running[fut] = j
+            if not any(p in by_position for p in adjacent(cell.position)):
+                waiting = waiting or (j, cell)
+                continue
+            self.submit(j, cell, by_position)
+        if not self.running and waiting is not None:
+            self.submit(*waiting, by_position)
+
+    def submit(self, j: int, cell: Cell, by_position: dict) -> None:
+        fut = self.ex.submit(solve_cell, self.spec.problem(cell), cell.index,
+                             self.spec.values_of(cell), neighbours_of(cell, by_position))
+        self.running[fut] = j
 
     def repair(self, round_: int) -> int:
         """Submit this round's repairs (:func:`looser_than_stricter`); how many."""

@@ -16,6 +16,11 @@ ATLAS_UNITS = {"cell": "- (the cell's index in the grid, the last axis fastest)"
                "repair": "- (the round of repairs that gave the cell's optimum; 0: its first "
                          "solve)",
                "repairs": "- (count of cells solved again from a stricter neighbour's optimum)",
+               "n_cells": COUNT, "n_feasible": COUNT,
+               "bound": "the unit named by the entry's own unit key (reachable: the bound out "
+                        "of reach)",
+               "value": "the unit named by the entry's own unit key (reachable: the nearest "
+                        "value any design in the bounds reaches)",
                "phases": COUNT, "count": COUNT, "finished_s": "s (since the run started)"}
 
 

@@ -9,6 +9,7 @@ import pytest
 from optdesign.atlas.spec import load_atlas
 from optdesign.atlas.worker import solve_cell
 from tests.conftest import ROOT
+from tests.test_units import unlisted
 
 #: the disc problem's optima at n = 4 and 6 (README, solve_scaling: 0.252056, 0.140205), whose
 #: box and pin radius this atlas holds relative to the 20 mm crank; the exact evaluator's δ,
@@ -33,6 +34,7 @@ def test_a_two_by_two_atlas_holds_the_disc_problems_optima(tiny_atlas):
     assert doc["axes"] == {"phases": [4, 6], "min_transmission_angle_deg": [40, 45]}
     assert doc["units"]["l0"].startswith("- (length / the regulated length l1")
     assert {"delta", "ratio", "pin_radius", "time_s", "cell"} <= set(doc["units"])
+    assert unlisted(doc) == set() and list(doc)[-2:] == ["schema_version", "units"]
     for name in ("atlas_counts.png", "atlas_map.png", "atlas.html", "cells.jsonl"):
         assert (out / name).stat().st_size > 1000
 

@@ -96,8 +96,9 @@ def settings_of(spec: AtlasSpec) -> dict:
     """What a journal must have been written for to be resumed."""
     text = json.dumps({"axes": spec.axes, "fixed": spec.fixed, "base": spec.base},
                       sort_keys=True, default=str)
+    # the axes' order numbers the cells: a file with its axes reordered is another grid
     return {"atlas": spec.name, "atlas_sha256": hashlib.sha256(text.encode()).hexdigest(),
-            "cells": len(spec.cells())}
+            "axes": list(spec.axes), "cells": len(spec.cells())}
 
 
 def run_atlas(spec: AtlasSpec, out_dir, workers: int | None = None, resume: bool = False,

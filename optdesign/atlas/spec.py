@@ -40,7 +40,8 @@ AXES = {
 #: an axis's value when the file gives it neither as an axis nor under ``fixed:``
 DEFAULTS = {"min_transmission_angle_deg": 40.0, "min_pin_radius": 0.0, "min_ratio": 0.0,
             "stroke": "forward"}
-TOP_KEYS = {"name", "mechanism", "design", "axes", "fixed", "objective", "options", "solver"}
+TOP_KEYS = {"name", "mechanism", "design", "axes", "fixed", "objective", "options", "solver",
+            "regulation"}
 OBJECTIVE_KEYS = {"minimize", "ripple"}
 RANGE_KEYS = {"lower", "upper", "step"}
 #: most cells of one atlas, and most values of one axis
@@ -161,7 +162,7 @@ def atlas_from_dict(data: Any, where: str = "<dict>", default_name: str = "atlas
         raise r.error("objective.minimize", f"an atlas maps the least ripple: give minimize: "
                                             f"ripple (got {objective['minimize']!r})")
     base = {"mechanism": mechanism, "design": design, "objective": objective}
-    for key in ("options", "solver"):
+    for key in ("options", "solver", "regulation"):     # fractions and settings: scale-free
         if key in top:
             base[key] = r.mapping(top[key], key)
     spec = AtlasSpec(name, mechanism, where, axes, fixed, base)

@@ -50,3 +50,42 @@ def test_resume_without_a_journal_says_so(tmp_path, capsys):
     path.write_text(yaml.safe_dump(TINY))
     assert main(["atlas", str(path), "--out", str(tmp_path / "out"), "--resume"]) == 2
     assert "nothing to resume" in capsys.readouterr().err
+
+
+def _copied(tiny_atlas, tmp_path):
+    import shutil
+    out = tmp_path / "out"
+    shutil.copytree(tiny_atlas[0], out)
+    return out
+
+
+@pytest.mark.parametrize("data, ordered, changed", [
+    (_with(lambda d: d["fixed"].update(min_ratio=0.4)), False, "atlas_sha256"),
+    (TINY, True, "axes"),              # sorted: the axes in another order number the cells
+])
+def test_resume_refuses_a_journal_of_another_atlas(tiny_atlas, tmp_path, capsys, data,
+                                                   ordered, changed):
+    out = _copied(tiny_atlas, tmp_path)
+    path = tmp_path / "tiny.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=ordered))
+    assert main(["atlas", str(path), "--out", str(out), "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cannot resume, the run's settings changed" in err
+    assert f"({changed})" in err
+
+
+def test_resume_refuses_a_record_that_is_not_its_designs(tiny_atlas, tmp_path, capsys):
+    import json
+    out = _copied(tiny_atlas, tmp_path)
+    journal = out / "cells.jsonl"
+    lines = journal.read_text().splitlines()
+    record = json.loads(lines[2])
+    record["delta"] *= 0.9                        # a better δ than its design has
+    lines[2] = json.dumps(record)
+    journal.write_text("\n".join(lines) + "\n")
+    path = tmp_path / "tiny.yaml"
+    path.write_text(yaml.safe_dump(TINY, sort_keys=False))
+    assert main(["atlas", str(path), "--out", str(out), "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cells.jsonl: line 3: the record does not match its " \
+                                    "design" in err

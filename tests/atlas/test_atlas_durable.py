@@ -65,8 +65,9 @@ def test_a_killed_dask_worker_loses_no_cell(cluster, tiny_path, tiny_atlas, tmp_
                                text=True)
         victim, deadline = None, time.monotonic() + 120
         while victim is None and run.poll() is None and time.monotonic() < deadline:
-            busy = [client.scheduler_info()["workers"][w]["name"]
-                    for w, keys in client.processing().items() if keys]
+            info = client.scheduler_info()["workers"]     # a worker may join in between
+            busy = [info[w]["name"] for w, keys in client.processing().items()
+                    if keys and w in info]
             if busy:            # a worker solving a cell: kill it
                 victim = busy[0]
                 os.kill(procs[victim].pid, signal.SIGKILL)

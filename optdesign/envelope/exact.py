@@ -12,7 +12,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
 from optdesign.envelope.sampled import STROKE_SIGNS, StrokeFigures
 
@@ -160,6 +159,8 @@ def _runs(curves: Curves, phi: np.ndarray, f: np.ndarray) -> list[Run]:
 
 def _resolve(curves, lo, hi, a, b, depth) -> list[tuple[float, int]]:
     """Switch points in [lo, hi] where the envelope goes from curve a to curve b."""
+    from scipy.optimize import brentq     # here: a command that only loads a file needs none
+
     def gap(x):
         x %= TWO_PI
         return curves.one(x, a)[0] - curves.one(x, b)[0]
@@ -206,6 +207,8 @@ def stationary_angles(curves: Curves, run: Run, phi: np.ndarray, df: np.ndarray)
                          [run.end]])
     ends = curves.grid(np.mod(np.array([run.start, run.end]), TWO_PI))[1][c]
     ds = np.concatenate([[ends[0]], df[c, idx], [ends[1]]])
+
+    from scipy.optimize import brentq
 
     def slope(x):
         return curves.one(x % TWO_PI, c)[1]

@@ -26,13 +26,12 @@ from pathlib import Path
 import numpy as np
 
 from optdesign.errors import OptDesignError, ProblemError
-from optdesign.fronts import refine, worker
+from optdesign.fronts import refine
 from optdesign.fronts.axis import axis_of, with_axis
 from optdesign.fronts.cluster import connect
 from optdesign.fronts.files import write_front
 from optdesign.fronts.front import ParetoResult, evaluate, frame
 from optdesign.fronts.section import DEFAULT_POINTS, ParetoSection
-from optdesign.fronts.seeds import ScreenedCount
 from optdesign.fronts.store import Journal
 from optdesign.lifetime import die_with_parent, raise_if_terminated
 from optdesign.quantities.criteria import result_columns
@@ -58,6 +57,14 @@ def grid(section: ParetoSection, ends: dict, points: int) -> np.ndarray:
         return np.array([a])
     return np.linspace(a, b, points)
 
+
+
+def _worker():
+    """:mod:`optdesign.fronts.worker`, imported when the first point is submitted: it brings
+    the solver and SciPy's statistics (most of a second), and every problem file with a
+    ``pareto:`` section imports this package (its section's parser) whether it sweeps or not."""
+    from optdesign.fronts import worker
+    return worker
 
 class _Inline:
     """Runs each task at submission, in this process (``workers=1``)."""
@@ -241,7 +248,7 @@ class _Sweep:
             for n in self.counts:
                 missing = [k for k in self.ends if (n, k) not in self.done]
                 for k in missing:
-                    self.running[self.ex.submit(worker.solve_end, self.problem, n, k)] = (n, None)
+                    self.running[self.ex.submit(_worker().solve_end, self.problem, n, k)] = (n, None)
                 if not missing:
                     self.open_count(n)
                     self.advance(n)
@@ -292,7 +299,7 @@ class _Sweep:
         i = c["order"][c["pos"]]
         fallbacks = [e["design"] for e in c["ends"] if e["design"] != c["start"]]
         eps = float(c["eps"][i])
-        fut = self.ex.submit(worker.solve_point, self.problem, count, i, eps, c["start"],
+        fut = self.ex.submit(_worker().solve_point, self.problem, count, i, eps, c["start"],
                              fallbacks, self.seeds(count, eps, [c["start"]]), [],
                              {"round": 0}, self.known(count))
         self.running[fut] = (count, j)
@@ -309,6 +316,8 @@ class _Sweep:
         away from the designs in ``near``; the count is screened on first use."""
         if count not in self.screened:
             try:
+                from optdesign.fronts.seeds import ScreenedCount
+
                 self.screened[count] = ScreenedCount.of(self.problem, count)
             except (OptDesignError, RuntimeError, ValueError, ArithmeticError):
                 self.screened[count] = None     # no screening: the chains' own starts
@@ -365,7 +374,7 @@ class _Sweep:
                  + (f", {again} of them re-solves" if again else "")
                  + f"; {len(self.done)} of {self.bar.total} done")
         for count, t, seeds, tags in jobs:
-            fut = self.ex.submit(worker.solve_point, self.problem, count, t.index, t.epsilon,
+            fut = self.ex.submit(_worker().solve_point, self.problem, count, t.index, t.epsilon,
                                  t.start, [], seeds, t.also, tags, self.known(count))
             self.running[fut] = (count, "round")
 
@@ -405,13 +414,13 @@ class _Sweep:
             return
         interior = list(range(len(eps)))
         if eps[0] == refine.gain(lo_end) and (count, 0) not in self.done:
-            self.finish(worker.copy_end(lo_end, 0) | {"round": 0})
+            self.finish(_worker().copy_end(lo_end, 0) | {"round": 0})
         if eps[0] == refine.gain(lo_end):
             interior.remove(0)
         last = len(eps) - 1
         if last > 0 and hi_end["feasible"] and eps[-1] == refine.gain(hi_end):
             if (count, last) not in self.done:
-                self.finish(worker.copy_end(hi_end, last) | {"round": 0})
+                self.finish(_worker().copy_end(hi_end, last) | {"round": 0})
             interior.remove(last)
         ok_ends = [e for e in (lo_end, hi_end) if e["feasible"]]
         for j, order in enumerate(_chains(interior, eps, self.n_chains)):

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
-from scipy import special
 
 #: lanes per pass: the work arrays of one pass stay in the processor's cache
 CHUNK = 4096
@@ -107,7 +106,10 @@ def _compile(fn: ca.Function):
         else:
             raise NotImplementedError(f"{fn.name()}: instruction {op} has no NumPy lane form")
     source = "def kernel(a, o):\n" + "".join(f"    {line}\n" for line in body or ["pass"])
-    namespace = {"np": np, "special": special}
+    namespace = {"np": np}
+    if any("special." in line for line in body):     # erf alone needs scipy (0.2 s to import)
+        from scipy import special
+        namespace["special"] = special
     exec(compile(source, f"<lanes {fn.name()}>", "exec"), namespace)
     return namespace["kernel"]
 

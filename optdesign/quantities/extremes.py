@@ -14,7 +14,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
 from optdesign.numerics.buffered import buffered
 from optdesign.numerics.lanes import Lanes
@@ -125,6 +124,7 @@ def _stationary(slope, lo: float, mid: float, hi: float, g_lo: float, g_mid: flo
     s_lo, s_hi = slope(lo), slope(hi)         # the safeguard: Brent on the bracket
     if not s_lo > 0 > s_hi:
         return None
+    from scipy.optimize import brentq     # here: a command that only loads a file needs none
     return brentq(slope, lo, hi, xtol=1e-14, rtol=4 * np.finfo(float).eps)
 
 

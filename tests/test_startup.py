@@ -1,0 +1,54 @@
+"""Start-up: a command imports only what it uses.
+
+Each check runs in a fresh interpreter (what this test process imported says nothing) and
+lists the heavy packages found in ``sys.modules`` afterwards: CasADi, pandas, matplotlib,
+Dask, SciPy and their like cost from a tenth of a second to most of one each to import.
+"""
+import json
+import subprocess
+import sys
+
+from optdesign.cli import COMMANDS
+from tests.conftest import ROOT
+
+#: the packages worth a look, and SciPy's subpackages that a command may need one of without
+#: the others (scipy.optimize brings linalg, sparse, special and fft along)
+HEAVY = ("casadi", "pandas", "matplotlib", "dask", "distributed", "scipy", "scipy.optimize",
+         "scipy.stats", "scipy.integrate", "ezdxf", "tqdm", "PIL")
+
+#: prints, after running CODE, which of HEAVY are in sys.modules
+PROBE = ("import sys, json\n{code}\n"
+         "print(json.dumps([n for n in {heavy!r} if n in sys.modules]))\n")
+
+
+def _start(code: str) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-c", PROBE.format(code=code, heavy=HEAVY)],
+                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+
+
+def _heavy(proc: subprocess.Popen) -> set[str]:
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err
+    return set(json.loads(out.splitlines()[-1]))
+
+
+def test_the_command_modules_import_nothing_heavy():
+    """Building the command line imports every command's module: each must stay light (its
+    run() imports the library it needs)."""
+    running = {name: _start(f"import {name}") for name in COMMANDS}    # at once: ~0.1 s each
+    pulled = {name: _heavy(proc) for name, proc in running.items()}
+    assert pulled == {name: set() for name in COMMANDS}
+
+
+def test_analyze_imports_only_what_one_exact_evaluation_needs():
+    proc = _start("from optdesign.cli import main\n"
+                  "assert main(['analyze', 'problems/sharkov2022.yaml']) == 0")
+    allowed = {
+        "casadi",              # the mechanism's symbolic functions, evaluated exactly
+        "scipy",               # the package of the two below
+        "scipy.optimize",      # brentq: the envelope's switch and stationary points
+    }
+    found = _heavy(proc)
+    assert found <= allowed, f"analyze imported {sorted(found - allowed)}"
+    assert {"matplotlib", "pandas", "dask", "scipy.stats", "tqdm"}.isdisjoint(found)

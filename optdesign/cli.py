@@ -8,6 +8,8 @@ mistake (:mod:`optdesign.problem.plausibility`) adds one warning line and goes o
 """
 from __future__ import annotations
 
+from optdesign.outputs import phases  # noqa: F401  (first: its clock starts with the program)
+
 import argparse
 import os
 import sys

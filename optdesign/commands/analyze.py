@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from optdesign.commands.design_source import add_arguments, loaded
+from optdesign.outputs.phases import answered, phase
 
 
 def add_parser(sub) -> None:
@@ -15,26 +16,34 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from optdesign.analyses.analyze import analyze, format_analysis
-    from optdesign.outputs.atomic import json_text
+    with phase("imports"):
+        import scipy.optimize  # noqa: F401  (brentq, first used by the evaluation)
 
-    problem, chosen = loaded(args, one_count=False)
+        from optdesign.analyses.analyze import analyze, format_analysis
+        from optdesign.outputs.atomic import json_text
+        from optdesign.problem.loader import load_problem  # noqa: F401  (read by loaded())
+
+    with phase("reading"):
+        problem, chosen = loaded(args, one_count=False)
     out = None
     if args.out is not None:
         from optdesign.outputs.checks import prepare_out
         out = prepare_out(args.out, problem.name, files=("regulation.png",))
-    result = analyze(problem)
+    with phase("evaluating"):
+        result = analyze(problem)
     if args.json:
         print(json_text(chosen.stamped(result.to_dict())))
     else:
         print(f"design: {chosen.source}")
         print(format_analysis(result, problem.name))
+    answered()
     if out is not None and result.assembles:
         from optdesign.analyses.analyze import regulation_curve
         from optdesign.commands.files import write_regulation
 
-        path = write_regulation(regulation_curve(problem), result.regulation_range,
-                                f"{problem.name}: δ and ratio against e", out)
+        with phase("figures"):
+            path = write_regulation(regulation_curve(problem), result.regulation_range,
+                                    f"{problem.name}: δ and ratio against e", out)
         if not args.json:
             print(f"wrote {path}")
     if not result.assembles:

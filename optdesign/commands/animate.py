@@ -10,6 +10,7 @@ beside it (:mod:`optdesign.export.animation`). Exit 0; 1 when the design does no
 from __future__ import annotations
 
 from optdesign.commands.design_source import add_arguments, checked_eccentricity, loaded
+from optdesign.outputs.phases import answered, phase
 
 #: most frames of --frames
 MAX_FRAMES = 720
@@ -30,12 +31,15 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    import shutil
+    with phase("imports"):
+        import shutil
 
-    from optdesign.errors import UsageError
-    from optdesign.outputs.checks import prepare_out
+        from optdesign.errors import UsageError
+        from optdesign.outputs.checks import prepare_out
+        from optdesign.problem.loader import load_problem  # noqa: F401  (read by loaded())
 
-    problem, chosen = loaded(args)
+    with phase("reading"):
+        problem, chosen = loaded(args)
     checked_eccentricity(args.eccentricity)
     if not 8 <= args.frames <= MAX_FRAMES:
         raise UsageError(f"--frames must lie in [8, {MAX_FRAMES}] (got {args.frames})")
@@ -61,18 +65,22 @@ def write_animation(problem, out, eccentricity: float = 1.0, frames: int = 120,
     from optdesign.export.animation import html_page, movie, turn, turn_title
     from optdesign.outputs.atomic import atomic_write_bytes, atomic_write_text
 
-    design = Design.from_problem(problem)
-    design.check_assembly(eccentricity)
-    ev = evaluate(design, problem.stroke, problem.input_speed, (eccentricity,))
-    if ev.failure is not None:
-        raise ev.failure
-    title = turn_title(problem, design, ev.per_e[0].figures[problem.stroke])
-    data = turn(design, problem.stroke, problem.input_speed, eccentricity, frames)
-    written = [atomic_write_text(Path(out) / html_name, html_page(data, title))]
+    with phase("evaluating"):
+        design = Design.from_problem(problem)
+        design.check_assembly(eccentricity)
+        ev = evaluate(design, problem.stroke, problem.input_speed, (eccentricity,))
+        if ev.failure is not None:
+            raise ev.failure
+        title = turn_title(problem, design, ev.per_e[0].figures[problem.stroke])
+        data = turn(design, problem.stroke, problem.input_speed, eccentricity, frames)
+    with phase("files"):
+        written = [atomic_write_text(Path(out) / html_name, html_page(data, title))]
+    if movies:
+        answered()                    # the page is there; the movies take their time
     if movies and frames > MOVIE_FRAMES:      # a movie's frames are drawn one by one: fewer
         data = turn(design, problem.stroke, problem.input_speed, eccentricity, MOVIE_FRAMES)
     for name in movies:
-        with tempfile.TemporaryDirectory() as scratch:
+        with phase("figures"), tempfile.TemporaryDirectory() as scratch:
             path = Path(scratch) / name
             movie(data, title, path, fps=max(8, round(len(data.phi_deg) / 5)))
             written.append(atomic_write_bytes(Path(out) / name, path.read_bytes()))

@@ -10,6 +10,7 @@ the eccentricity; 2 for bad input.
 from __future__ import annotations
 
 from optdesign.commands.design_source import add_arguments, checked_eccentricity, loaded
+from optdesign.outputs.phases import answered, phase
 
 FORMATS = {"dxf": "linkage.dxf", "svg": "linkage.svg", "csv": "trajectories.csv"}
 
@@ -30,16 +31,21 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    import io
-    import math
+    with phase("imports"):
+        import io
+        import math
 
-    from optdesign.analyses.analyze import analyze
-    from optdesign.errors import UsageError
-    from optdesign.evaluation.design import Design
-    from optdesign.outputs.atomic import atomic_write_text
-    from optdesign.outputs.checks import prepare_out
+        import scipy.optimize  # noqa: F401  (brentq, first used by the evaluation)
 
-    problem, chosen = loaded(args)
+        from optdesign.analyses.analyze import analyze
+        from optdesign.errors import UsageError
+        from optdesign.evaluation.design import Design
+        from optdesign.outputs.atomic import atomic_write_text
+        from optdesign.outputs.checks import prepare_out
+        from optdesign.problem.loader import load_problem  # noqa: F401  (read by loaded())
+
+    with phase("reading"):
+        problem, chosen = loaded(args)
     checked_eccentricity(args.eccentricity)
     formats = [f.strip().lower() for f in args.format.split(",") if f.strip()]
     unknown = [f for f in formats if f not in FORMATS]
@@ -49,29 +55,33 @@ def run(args) -> int:
     if not math.isfinite(args.angle):
         raise UsageError(f"--angle must be a number of degrees (got {args.angle})")
     out = prepare_out(args.out, problem.name, files=tuple(FORMATS[f] for f in formats))
-    design = Design.from_problem(problem)
-    design.check_assembly(args.eccentricity)          # AssemblyError: exit 1, names the chain
-    result = analyze(problem)
+    with phase("evaluating"):
+        design = Design.from_problem(problem)
+        design.check_assembly(args.eccentricity)      # AssemblyError: exit 1, names the chain
+        result = analyze(problem)
     written = []
-    if "dxf" in formats or "svg" in formats:
-        from optdesign.export.drawing import linkage_document
+    with phase("files"):
+        if "dxf" in formats or "svg" in formats:
+            from optdesign.export.drawing import linkage_document
 
-        doc = linkage_document(design, _title(problem, design, result, args), args.angle,
-                               args.eccentricity)
-        if "dxf" in formats:
-            stream = io.StringIO()
-            doc.write(stream)
-            written.append(atomic_write_text(out / FORMATS["dxf"], stream.getvalue()))
-        if "svg" in formats:
-            from optdesign.export.svg import svg_text
+            doc = linkage_document(design, _title(problem, design, result, args), args.angle,
+                                   args.eccentricity)
+            if "dxf" in formats:
+                stream = io.StringIO()
+                doc.write(stream)
+                written.append(atomic_write_text(out / FORMATS["dxf"], stream.getvalue()))
+            if "svg" in formats:
+                from optdesign.export.svg import svg_text
 
-            written.append(atomic_write_text(out / FORMATS["svg"], svg_text(doc)))
-    if "csv" in formats:
-        from optdesign.export.trajectories import trajectories
+                written.append(atomic_write_text(out / FORMATS["svg"], svg_text(doc)))
+        if "csv" in formats:
+            from optdesign.export.trajectories import trajectories
 
-        table = trajectories(design, problem.stroke, problem.input_speed, args.eccentricity)
-        written.append(atomic_write_text(out / FORMATS["csv"],
-                                         table.to_csv(index=False, float_format="%.12g")))
+            table = trajectories(design, problem.stroke, problem.input_speed,
+                                 args.eccentricity)
+            written.append(atomic_write_text(out / FORMATS["csv"],
+                                             table.to_csv(index=False, float_format="%.12g")))
+    answered()
     print(f"design: {chosen.source}")
     print(f"wrote {', '.join(str(p) for p in written)}")
     return 0

@@ -3,6 +3,7 @@ position, velocity and acceleration analogues."""
 from __future__ import annotations
 
 from optdesign.commands.design_source import add_arguments, loaded
+from optdesign.outputs.phases import answered, phase
 
 #: most crank samples of --samples (a figure of 1441 is already smooth)
 MAX_SAMPLES = 100_000
@@ -21,14 +22,17 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from optdesign.analyses.curves import member_curves
-    from optdesign.evaluation.design import Design
-    from optdesign.errors import UsageError
-    from optdesign.outputs.checks import prepare_out
-    from optdesign.commands.files import write_curves
-    from optdesign.problem.loader import MIN_ECCENTRICITY
+    with phase("imports"):
+        from optdesign.evaluation.design import Design
+        from optdesign.errors import UsageError
+        from optdesign.figures.design import warm_up
+        from optdesign.outputs.checks import prepare_out
+        from optdesign.outputs.figure_process import FigureProcess
+        from optdesign.commands.files import write_curves
+        from optdesign.problem.loader import MIN_ECCENTRICITY
 
-    problem, chosen = loaded(args, one_count=False)
+    with phase("reading"):
+        problem, chosen = loaded(args, one_count=False)
     if not 0 < args.eccentricity <= 1:
         raise UsageError(f"--eccentricity must lie in (0, 1] (got {args.eccentricity:g})")
     if args.eccentricity < MIN_ECCENTRICITY:
@@ -39,11 +43,19 @@ def run(args) -> int:
     if args.samples > MAX_SAMPLES:
         raise UsageError(f"--samples must be at most {MAX_SAMPLES} (got {args.samples})")
     out = prepare_out(args.out, problem.name, files=("curves.png",))
-    design = Design.from_problem(problem)
-    design.check_assembly(args.eccentricity)          # AssemblyError: exit 1, names the chain
-    curves = member_curves(design, problem.stroke, args.eccentricity, args.samples)
-    path = write_curves(curves, f"{problem.name}: {problem.mechanism}, "
-                                f"e = {args.eccentricity:g}", out)
+    # the figures' process imports matplotlib while this one computes the curves
+    with FigureProcess(warm=warm_up) as figures:
+        with phase("evaluating"):
+            from optdesign.analyses.curves import member_curves
+
+            design = Design.from_problem(problem)
+            design.check_assembly(args.eccentricity)  # AssemblyError: exit 1, names the chain
+            curves = member_curves(design, problem.stroke, args.eccentricity, args.samples)
+        with phase("figures"):
+            figures.draw([(write_curves, (curves, f"{problem.name}: {problem.mechanism}, "
+                                                  f"e = {args.eccentricity:g}", out))])
+            path, = figures.wait()
+    answered()
     print(f"design: {chosen.source}")
     print(path)
     return 0

@@ -8,6 +8,7 @@ does not assemble (the shaft's own figures are still printed and drawn).
 from __future__ import annotations
 
 from optdesign.commands.design_source import add_arguments, loaded
+from optdesign.outputs.phases import phase
 
 
 def add_parser(sub) -> None:
@@ -22,24 +23,35 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from optdesign.analyses.analyze import analyze
-    from optdesign.driveline.report import driveline_report, format_driveline
-    from optdesign.outputs.atomic import json_text
-    from optdesign.outputs.checks import prepare_out
-    from optdesign.commands.files import write_driveline
+    with phase("imports"):
+        from optdesign.figures.design import warm_up
+        from optdesign.outputs.answer import print_answer, raise_if_unprinted
+        from optdesign.outputs.atomic import json_text
+        from optdesign.outputs.checks import prepare_out
+        from optdesign.outputs.figure_process import FigureProcess
+        from optdesign.commands.files import write_driveline
 
-    problem, chosen = loaded(args, one_count=False)
-    section = problem.require_section("driveline")
+    with phase("reading"):
+        problem, chosen = loaded(args, one_count=False)
+        section = problem.require_section("driveline")
     out = prepare_out(args.out, problem.name, files=("driveline.png",))
-    result = analyze(problem)
-    path = out / "driveline.png"
-    report = driveline_report(problem, result, figure=str(path))
-    write_driveline(section, path, operating_speed=report.get("operating_speed_rad_s"),
-                    speed_limit=report.get("speed_limit_rad_s"))
-    if args.json:
-        print(json_text(chosen.stamped(report)))
-    else:
-        print(f"design: {chosen.source}")
-        print(format_driveline(report))
+    # the figures' process imports matplotlib while this one evaluates the design
+    with FigureProcess(warm=warm_up) as figures:
+        with phase("imports"):
+            from optdesign.analyses.analyze import analyze
+            from optdesign.driveline.report import driveline_report, format_driveline
+        with phase("evaluating"):
+            result = analyze(problem)
+            path = out / "driveline.png"
+            report = driveline_report(problem, result, figure=str(path))
+        print_answer(json_text(chosen.stamped(report)) if args.json else
+                     f"design: {chosen.source}\n{format_driveline(report)}")
+        with phase("figures"):
+            figures.draw([(write_driveline, (section, path),
+                           {"operating_speed": report.get("operating_speed_rad_s"),
+                            "speed_limit": report.get("speed_limit_rad_s")})])
+            figures.wait()
+    raise_if_unprinted()
+    if not args.json:
         print(f"wrote {path}")
     return 0 if result.assembles else 1

@@ -2,7 +2,10 @@
 
 One function per command's set of files; the commands decide where, this module decides what
 goes into each file, and :mod:`optdesign.outputs.atomic` makes every write all-or-nothing. Figures are
-drawn by the plotting functions of each package (which return a figure and never write).
+drawn by the plotting functions of each package (which return a figure and never write); a
+command's figures are jobs of a :class:`~optdesign.outputs.figure_process.FigureProcess` (drawn
+beside the command when it passes one, here otherwise), each a module-level function of
+picklable arguments.
 """
 from __future__ import annotations
 
@@ -29,14 +32,26 @@ def save_figure(fig, path: Path, **kwargs) -> Path:
         plt.close(fig)
 
 
+def saved(plot, args: tuple, path: Path, save: dict | None = None) -> Path:
+    """``plot(*args)`` saved to ``path`` with ``save``'s savefig options: one figure as a job
+    of a :class:`~optdesign.outputs.figure_process.FigureProcess`."""
+    return save_figure(plot(*args), path, **(save or {}))
+
+
+def _drawer(figures):
+    """``figures``, or one that draws in this process."""
+    from optdesign.outputs.figure_process import FigureProcess
+
+    return figures if figures is not None else FigureProcess(enabled=False)
+
+
 # --------------------------------------------------------------------------- solve
 def write_solve(result, problem, out_dir: str | Path, plots: bool = True,
                 source_path=None) -> list[Path]:
     """result.json, summary.txt and (for a design) design.yaml (the problem file at
-    ``source_path`` with the design fixed), speeds.png, mechanism.png and animation.html (the
-    optimum over one crank turn)."""
+    ``source_path`` with the design fixed), then, with ``plots``, the figures of
+    :func:`draw_solve` drawn here."""
     from optdesign.commands.design_source import design_yaml
-    from optdesign.evaluation.design import Design
     from optdesign.solver.outputs import summary_text
 
     out = Path(out_dir)
@@ -45,63 +60,93 @@ def write_solve(result, problem, out_dir: str | Path, plots: bool = True,
     fixed = design_yaml(source_path, result)
     if fixed is not None:
         written.append(atomic_write_text(out / "design.yaml", fixed))
-    if plots and result.design:
-        from optdesign.figures.design import plot_mechanism, plot_speeds
-
-        design = Design.from_problem(problem, result.design)
-        written.append(save_figure(
-            plot_speeds(design, problem.stroke, problem.input_speed,
-                        title=f"{problem.name}: optimum, δ = {result.delta:.4f}, "
-                              f"ratio = {result.ratio:.4f}"), out / "speeds.png"))
-        written.append(save_figure(plot_mechanism(design, title=f"{problem.name}: optimum"),
-                                   out / "mechanism.png"))
-        from optdesign.commands.animate import write_animation
-
-        written += write_animation(problem.with_design(**result.design), out)
+    if plots:
+        written += draw_solve(result, problem, out)
     return written
+
+
+def draw_solve(result, problem, out_dir: str | Path, figures=None) -> list[Path]:
+    """speeds.png and mechanism.png of the optimum, drawn by ``figures`` (a
+    :class:`~optdesign.outputs.figure_process.FigureProcess`; default: here), and
+    animation.html (the optimum over one crank turn), written here meanwhile; nothing
+    without a design."""
+    if not result.design:
+        return []
+    out = Path(out_dir)
+    figures = _drawer(figures)
+    figures.draw([(_speeds_png, (problem, result.design, out / "speeds.png",
+                                 f"{problem.name}: optimum, δ = {result.delta:.4f}, "
+                                 f"ratio = {result.ratio:.4f}")),
+                  (_mechanism_png, (problem, result.design, out / "mechanism.png",
+                                    f"{problem.name}: optimum"))])
+    from optdesign.commands.animate import write_animation
+
+    html = write_animation(problem.with_design(**result.design), out)
+    return figures.wait() + html
+
+
+def _speeds_png(problem, values: dict, path: Path, title: str) -> Path:
+    """Each rocker's driving speed and the output envelope of the design ``values``."""
+    from optdesign.evaluation.design import Design
+    from optdesign.figures.design import plot_speeds
+
+    design = Design.from_problem(problem, values)
+    return save_figure(plot_speeds(design, problem.stroke, problem.input_speed, title=title),
+                       path)
+
+
+def _mechanism_png(problem, values: dict, path: Path, title: str) -> Path:
+    """The linkage of the design ``values`` to scale."""
+    from optdesign.evaluation.design import Design
+    from optdesign.figures.design import plot_mechanism
+
+    return save_figure(plot_mechanism(Design.from_problem(problem, values), title=title), path)
 
 
 # --------------------------------------------------------------------------- pareto
 def write_report(result, problem, out_dir, problem_path=None,
-                 command: str | None = None) -> list[Path]:
-    """fronts.png, lengths.png, knee_mechanism.png, knee_speeds.png, knee_animation.html (the
-    knee over one crank turn), report.md and report.html."""
-    from optdesign.evaluation.design import Design
+                 command: str | None = None, figures=None) -> list[Path]:
+    """fronts.png, lengths.png, knee_mechanism.png, knee_speeds.png (drawn by ``figures``,
+    a :class:`~optdesign.outputs.figure_process.FigureProcess`; default: here),
+    knee_animation.html (the knee over one crank turn, written here meanwhile), then
+    report.md and report.html."""
     from optdesign.fronts.report import (blocks, plot_fronts, plot_lengths, render_html, render_md,
                                          run_info)
-    from optdesign.figures.design import plot_mechanism, plot_speeds
 
     out = Path(out_dir)
-    images = {}
     points = result.points
     points.attrs["knee"] = result.indicators.get("knee")
     axis = result.axis
-    images["fronts.png"] = save_figure(
-        plot_fronts(points, title=f"{problem.name}: ripple against {axis.name}", axis=axis),
-        out / "fronts.png")
+    jobs = {"fronts.png": (saved, (plot_fronts, (points, None, f"{problem.name}: ripple "
+                                                                 f"against {axis.name}", axis),
+                                   out / "fronts.png"))}
     free = problem.free_lengths()
     if free:
-        images["lengths.png"] = save_figure(
-            plot_lengths(points, {k: (problem.design[k].lower, problem.design[k].upper)
-                                  for k in free},
-                         title=f"{problem.name}: free lengths along the front", axis=axis),
-            out / "lengths.png")
+        bounds = {k: (problem.design[k].lower, problem.design[k].upper) for k in free}
+        jobs["lengths.png"] = (saved, (plot_lengths, (points, bounds, None, f"{problem.name}: "
+                                                      f"free lengths along the front", axis),
+                                       out / "lengths.png"))
     knee = result.knee
+    values = None
     if knee is not None:
         values = {k: float(knee[k]) for k in problem.model.lengths}
         values[problem.model.count_variable] = int(knee["count"])
-        design = Design.from_problem(problem, values)
-        images["knee_mechanism.png"] = save_figure(
-            plot_mechanism(design, title=f"knee design, n = {int(knee['count'])}"),
-            out / "knee_mechanism.png")
-        images["knee_speeds.png"] = save_figure(
-            plot_speeds(design, problem.stroke, problem.input_speed,
-                        title=f"knee design: δ = {knee['delta']:.4f}, "
-                              f"ratio = {knee['ratio']:.4f}"), out / "knee_speeds.png")
+        jobs["knee_mechanism.png"] = (_mechanism_png, (
+            problem, values, out / "knee_mechanism.png", f"knee design, n = {int(knee['count'])}"))
+        jobs["knee_speeds.png"] = (_speeds_png, (
+            problem, values, out / "knee_speeds.png",
+            f"knee design: δ = {knee['delta']:.4f}, ratio = {knee['ratio']:.4f}"))
+    figures = _drawer(figures)
+    figures.draw(list(jobs.values()))
+    html = []
+    if values is not None:
         from optdesign.commands.animate import write_animation
 
-        images["knee_animation.html"] = write_animation(
-            problem.with_design(**values), out, html_name="knee_animation.html")[0]
+        html = write_animation(problem.with_design(**values), out,
+                               html_name="knee_animation.html")
+    images = dict(zip(jobs, figures.wait()))
+    if html:
+        images["knee_animation.html"] = html[0]
     items = blocks(result, problem, run_info(problem, result, problem_path, command), images)
     return list(images.values()) + [
         atomic_write_text(out / "report.md", render_md(items)),
@@ -109,12 +154,10 @@ def write_report(result, problem, out_dir, problem_path=None,
 
 
 # --------------------------------------------------------------------------- simulate
-def write_simulation(result, out: Path) -> list[Path]:
-    """dynamics.json, the steady cycle as CSV and the three figures (angles, speeds,
-    loads)."""
+def write_simulation(result, out: Path, plots: bool = True) -> list[Path]:
+    """dynamics.json and the steady cycle as CSV, then, with ``plots``, the three figures of
+    :func:`draw_simulation` drawn here."""
     import numpy as np
-
-    from optdesign.dynamics.plots import plot_angles, plot_loads, plot_speeds
 
     written = [atomic_write_json(out / "dynamics.json", result.to_dict())]
     tr = result.trace
@@ -125,11 +168,21 @@ def write_simulation(result, out: Path) -> list[Path]:
     rows = np.column_stack(list(cols.values()))
     lines = [",".join(cols)] + [",".join(f"{v:.10g}" for v in row) for row in rows]
     written.append(atomic_write_text(out / "dynamics_cycle.csv", "\n".join(lines) + "\n"))
-    for name, plot in (("dynamics_angles.png", plot_angles),
-                       ("dynamics_speeds.png", plot_speeds),
-                       ("dynamics_loads.png", plot_loads)):
-        written.append(save_figure(plot(result), out / name, dpi=120))
+    if plots:
+        written += draw_simulation(result, out)
     return written
+
+
+def draw_simulation(result, out: Path, figures=None) -> list[Path]:
+    """The three figures (angles, speeds, loads), drawn by ``figures`` (default: here)."""
+    from optdesign.dynamics.plots import plot_angles, plot_loads, plot_speeds
+
+    figures = _drawer(figures)
+    figures.draw([(saved, (plot, (result,), out / name, {"dpi": 120}))
+                  for name, plot in (("dynamics_angles.png", plot_angles),
+                                     ("dynamics_speeds.png", plot_speeds),
+                                     ("dynamics_loads.png", plot_loads))])
+    return figures.wait()
 
 
 # --------------------------------------------------------------------------- tolerance
@@ -137,14 +190,23 @@ def write_simulation(result, out: Path) -> list[Path]:
 TOLERANCE_FILES = ("tolerance.json", "tolerance.csv", "tolerance.png")
 
 
-def write_tolerance(doc: dict, frame, out: Path) -> list[Path]:
-    """tolerance.json, the Monte Carlo parts as tolerance.csv and their histograms."""
+def write_tolerance(doc: dict, frame, out: Path, plots: bool = True) -> list[Path]:
+    """tolerance.json, the Monte Carlo parts as tolerance.csv and, with ``plots``, their
+    histograms (:func:`draw_tolerance`) drawn here."""
+    csv = frame.to_csv(index=False, float_format="%.10g")
+    written = [atomic_write_json(out / "tolerance.json", doc),
+               atomic_write_bytes(out / "tolerance.csv", csv.encode("utf-8"))]
+    return written + (draw_tolerance(doc, frame, out) if plots else [])
+
+
+def draw_tolerance(doc: dict, frame, out: Path, figures=None) -> list[Path]:
+    """tolerance.png, the histograms of the parts, drawn by ``figures`` (default: here)."""
     from optdesign.tolerance.report import plot_tolerance
 
-    csv = frame.to_csv(index=False, float_format="%.10g")
-    return [atomic_write_json(out / "tolerance.json", doc),
-            atomic_write_bytes(out / "tolerance.csv", csv.encode("utf-8")),
-            save_figure(plot_tolerance(frame, doc), out / "tolerance.png", dpi=110)]
+    figures = _drawer(figures)
+    figures.draw([(saved, (plot_tolerance, (frame, doc), out / "tolerance.png",
+                           {"dpi": 110}))])
+    return figures.wait()
 
 
 # --------------------------------------------------------------------------- the others

@@ -5,6 +5,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from optdesign.outputs.phases import phase
+
 #: most ε values of --points: pareto.section.MAX_POINTS (not imported here: the pareto
 #: package pulls in pandas, and building the parser must stay light)
 MAX_POINTS = 1000
@@ -60,19 +62,21 @@ def _positive(low, high=None):
 
 
 def run(args) -> int:
-    from optdesign.errors import ProblemError
-    from optdesign.lifetime import exit_on_sigterm
-    from optdesign.outputs.checks import prepare_out, resolve_out
-    from optdesign.outputs.folder import OutputFolder
-    from optdesign.fronts import sweep
-    from optdesign.commands.files import PARETO_FILES, write_report
-    from optdesign.fronts.files import write_front
-    from optdesign.fronts.report import summary_text
-    from optdesign.problem.loader import load_problem
+    with phase("imports"):
+        from optdesign.errors import ProblemError
+        from optdesign.figures.design import warm_up
+        from optdesign.lifetime import exit_on_sigterm
+        from optdesign.outputs.answer import print_answer, raise_if_unprinted
+        from optdesign.outputs.checks import prepare_out, resolve_out
+        from optdesign.outputs.figure_process import FigureProcess
+        from optdesign.outputs.folder import OutputFolder
+        from optdesign.commands.files import PARETO_FILES, write_report
+        from optdesign.problem.loader import load_problem
 
-    problem = load_problem(args.problem)
-    if args.against is not None:
-        problem = _against(problem, args.problem, args.against)
+    with phase("reading"):
+        problem = load_problem(args.problem)
+        if args.against is not None:
+            problem = _against(problem, args.problem, args.against)
     if not problem.free_lengths():          # nothing to trade: say so before any work
         raise ProblemError(f"{Path(args.problem).name}: design: a front needs a free length "
                            f"(give one a range, e.g. {{lower: 30, upper: 90}}); every length "
@@ -81,23 +85,34 @@ def run(args) -> int:
     if args.resume and not os.path.lexists(out / "points.jsonl"):
         raise ProblemError(f"{out / 'points.jsonl'}: nothing to resume (no journal there)")
     out = prepare_out(args.out, problem.name, "_pareto", files=PARETO_FILES)
-    # one run at a time in ``out``; a fresh sweep clears the previous one's files first, so
-    # the folder never holds files of two runs (docs/contract.md)
-    with _connected(args.scheduler) as scheduler, exit_on_sigterm(), \
-            OutputFolder(out, PARETO_FILES) as folder:
-        if not args.resume:
-            folder.remove_owned()
-        result = sweep(problem, out, points=args.points, workers=args.workers,
-                       resume=args.resume, scheduler=scheduler)
-        files = write_front(result, out)
-        if not args.no_report:
-            command = " ".join(["optdesign pareto", args.problem, "--out", str(out)] + [
-                f"--{k} {getattr(args, k)}" for k in ("points", "against", "workers",
-                                                      "scheduler")
-                if getattr(args, k)] + (["--resume"] if args.resume else []))
-            files += write_report(result, problem, out, problem_path=args.problem,
-                                  command=command)
-    print(summary_text(result))
+    # the report's figures are drawn beside, by a process forked before any thread or worker
+    # (a Dask client, the sweep's pool) exists; it imports matplotlib while the sweep runs
+    with FigureProcess(enabled=not args.no_report, warm=warm_up) as figures:
+        with phase("imports"):
+            from optdesign.fronts import sweep
+            from optdesign.fronts.files import write_front
+            from optdesign.fronts.report import summary_text
+        # one run at a time in ``out``; a fresh sweep clears the previous one's files first,
+        # so the folder never holds files of two runs (docs/contract.md)
+        with _connected(args.scheduler) as scheduler, exit_on_sigterm(), \
+                OutputFolder(out, PARETO_FILES) as folder:
+            if not args.resume:
+                folder.remove_owned()
+            with phase("solving"):
+                result = sweep(problem, out, points=args.points, workers=args.workers,
+                               resume=args.resume, scheduler=scheduler)
+            with phase("files"):
+                files = write_front(result, out)
+                print_answer(summary_text(result))
+            if not args.no_report:
+                command = " ".join(["optdesign pareto", args.problem, "--out", str(out)] + [
+                    f"--{k} {getattr(args, k)}" for k in ("points", "against", "workers",
+                                                          "scheduler")
+                    if getattr(args, k)] + (["--resume"] if args.resume else []))
+                with phase("figures"):
+                    files += write_report(result, problem, out, problem_path=args.problem,
+                                          command=command, figures=figures)
+    raise_if_unprinted()
     print(f"wrote {', '.join(str(f) for f in files)}")
     return 0 if result.indicators["n_points"] else 1
 

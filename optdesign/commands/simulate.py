@@ -14,6 +14,7 @@ from __future__ import annotations
 import sys
 
 from optdesign.commands.design_source import add_arguments, loaded
+from optdesign.outputs.phases import phase
 
 
 def add_parser(sub) -> None:
@@ -33,17 +34,21 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from dataclasses import replace
+    with phase("imports"):
+        from dataclasses import replace
 
-    from optdesign.dynamics.section import MAX_CYCLES
-    from optdesign.dynamics.steady import simulate
-    from optdesign.errors import SolveError, UsageError
-    from optdesign.outputs.atomic import json_text
-    from optdesign.outputs.checks import prepare_out
-    from optdesign.commands.files import write_simulation
+        from optdesign.dynamics.section import MAX_CYCLES
+        from optdesign.errors import SolveError, UsageError
+        from optdesign.figures.design import warm_up
+        from optdesign.outputs.answer import print_answer, raise_if_unprinted
+        from optdesign.outputs.atomic import json_text
+        from optdesign.outputs.checks import prepare_out
+        from optdesign.outputs.figure_process import FigureProcess
+        from optdesign.commands.files import draw_simulation, write_simulation
 
-    problem, chosen = loaded(args, one_count=False)
-    section = problem.require_section("dynamics")
+    with phase("reading"):
+        problem, chosen = loaded(args, one_count=False)
+        section = problem.require_section("dynamics")
     overrides = {k: getattr(args, k) for k in ("freewheel", "crank", "cycles")
                  if getattr(args, k) is not None}
     if overrides.get("cycles", 1) < 1:
@@ -54,19 +59,26 @@ def run(args) -> int:
         "dynamics.json", "dynamics_cycle.csv", "dynamics_angles.png", "dynamics_speeds.png",
         "dynamics_loads.png"))
     section = replace(section, **overrides)
-    from tqdm import tqdm
-    try:                # turns until the cycle repeats: the bar ends early when it does
-        with tqdm(total=section.cycles, desc="turns", unit="turn", file=sys.stderr,
-                  disable=None, leave=False) as bar:
-            result = simulate(problem, section, method=args.method, progress=bar.update)
-    except SolveError as exc:
-        return _failed(problem, section, args, out, exc)
-    write_simulation(result, out)
-    if args.json:
-        print(json_text(chosen.stamped(result.to_dict())))
-    else:
-        print(f"design: {chosen.source}")
-        print(format_result(result))
+    # the figures' process imports matplotlib while this one integrates
+    with FigureProcess(warm=warm_up) as figures:
+        with phase("imports"):
+            from tqdm import tqdm
+
+            from optdesign.dynamics.steady import simulate
+        try:            # turns until the cycle repeats: the bar ends early when it does
+            with phase("solving"), tqdm(total=section.cycles, desc="turns", unit="turn",
+                                        file=sys.stderr, disable=None, leave=False) as bar:
+                result = simulate(problem, section, method=args.method, progress=bar.update)
+        except SolveError as exc:
+            return _failed(problem, section, args, out, exc)
+        with phase("files"):
+            write_simulation(result, out, plots=False)
+            print_answer(json_text(chosen.stamped(result.to_dict())) if args.json else
+                         f"design: {chosen.source}\n{format_result(result)}")
+        with phase("figures"):
+            draw_simulation(result, out, figures)
+    raise_if_unprinted()
+    if not args.json:
         print(f"wrote {out}/dynamics.json, dynamics_cycle.csv, dynamics_angles.png, "
               f"dynamics_speeds.png, dynamics_loads.png")
     if result.steady:

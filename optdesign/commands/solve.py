@@ -1,7 +1,16 @@
-"""``optdesign solve PROBLEM.yaml [--out DIR] [--json] [--no-plots]``."""
+"""``optdesign solve PROBLEM.yaml [--out DIR] [--json] [--no-plots]``.
+
+The answer comes first: the result is printed as soon as result.json, summary.txt and
+design.yaml are written into the new set, and only then are the figures drawn, by a process
+that imported matplotlib while the solver ran (:mod:`optdesign.outputs.figure_process`). The
+set, figures included, replaces the folder's previous one whole when the last figure is
+drawn; the ``wrote ...`` line follows.
+"""
 from __future__ import annotations
 
 import sys
+
+from optdesign.outputs.phases import phase
 
 
 def add_parser(sub) -> None:
@@ -14,30 +23,54 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from optdesign.outputs.atomic import json_text
-    from optdesign.outputs.checks import prepare_out
-    from optdesign.problem.loader import load_problem
-    from optdesign.solver import solve
-    from optdesign.lifetime import exit_on_sigterm, raise_if_terminated
-    from optdesign.outputs.folder import OutputFolder
-    from optdesign.commands.files import SOLVE_FILES, write_solve
-    from optdesign.solver.outputs import summary_text
+    with phase("imports"):
+        from optdesign.commands.files import SOLVE_FILES
+        from optdesign.figures.design import warm_up
+        from optdesign.outputs.answer import raise_if_unprinted
+        from optdesign.outputs.checks import prepare_out
+        from optdesign.outputs.figure_process import FigureProcess
+        from optdesign.problem.loader import load_problem
 
-    problem = load_problem(args.problem)
-    out = prepare_out(args.out, problem.name, files=SOLVE_FILES)     # before any work
-    # one run at a time in ``out``; its set replaces the previous one whole (docs/contract.md)
-    with exit_on_sigterm(), OutputFolder(out, SOLVE_FILES) as folder:
-        from tqdm import tqdm
-        with tqdm(total=len(problem.counts()), desc="phase counts", unit="count",
-                  file=sys.stderr, disable=None, leave=False) as bar:
-            result = solve(problem, progress=bar.update)
-        raise_if_terminated()                     # nothing published after a SIGTERM
-        files = folder.replace_with(
-            lambda into: write_solve(result, problem, into, plots=not args.no_plots,
-                                     source_path=args.problem))
-    if args.json:
-        print(json_text(result.to_dict()))
-    else:
-        print(summary_text(result, problem))
+    with phase("reading"):
+        problem = load_problem(args.problem)
+        out = prepare_out(args.out, problem.name, files=SOLVE_FILES)     # before any work
+    # the figures' process imports matplotlib while this one imports the solver and solves
+    with FigureProcess(enabled=not args.no_plots, warm=warm_up) as figures:
+        with phase("imports"):
+            from tqdm import tqdm
+
+            from optdesign.lifetime import exit_on_sigterm, raise_if_terminated
+            from optdesign.outputs.folder import OutputFolder
+            from optdesign.solver import solve
+        # one run at a time in ``out``; its set replaces the previous one whole
+        # (docs/contract.md)
+        with exit_on_sigterm(), OutputFolder(out, SOLVE_FILES) as folder:
+            with phase("solving"), tqdm(total=len(problem.counts()), desc="phase counts",
+                                        unit="count", file=sys.stderr, disable=None,
+                                        leave=False) as bar:
+                result = solve(problem, progress=bar.update)
+            raise_if_terminated()                     # nothing published after a SIGTERM
+            files = folder.replace_with(
+                lambda into: _write(result, problem, into, args, figures))
+    raise_if_unprinted()
+    if not args.json:
         print(f"wrote {', '.join(str(f) for f in files)}")
     return 0 if result.status == "optimal" else 1
+
+
+def _write(result, problem, into, args, figures) -> list:
+    """The set, into the folder ``into``: the result's files, the answer printed, then the
+    figures."""
+    from optdesign.commands.files import draw_solve, write_solve
+    from optdesign.outputs.answer import print_answer
+    from optdesign.outputs.atomic import json_text
+    from optdesign.solver.outputs import summary_text
+
+    with phase("files"):
+        files = write_solve(result, problem, into, plots=False, source_path=args.problem)
+        print_answer(json_text(result.to_dict()) if args.json else
+                     summary_text(result, problem))
+    if not args.no_plots:
+        with phase("figures"):
+            files += draw_solve(result, problem, into, figures)
+    return files

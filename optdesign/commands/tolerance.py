@@ -13,6 +13,7 @@ from __future__ import annotations
 import sys
 
 from optdesign.commands.design_source import add_arguments, chosen_design
+from optdesign.outputs.phases import phase
 
 #: most parts of --samples (tolerances.samples has the same limit)
 MAX_SAMPLES = 10_000_000
@@ -33,17 +34,19 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from optdesign.errors import UsageError
-    from optdesign.outputs.atomic import json_text
-    from optdesign.outputs.checks import prepare_out
-    from optdesign.commands.files import TOLERANCE_FILES, write_tolerance
-    from optdesign.problem.loader import load_problem
-    from optdesign.tolerance.montecarlo import monte_carlo
-    from optdesign.tolerance.parts import box_of
-    from optdesign.tolerance.report import format_tolerance, tolerance_document
-    from optdesign.tolerance.worst_case import worst_case
+    with phase("imports"):
+        from optdesign.errors import UsageError
+        from optdesign.figures.design import warm_up
+        from optdesign.outputs.answer import print_answer, raise_if_unprinted
+        from optdesign.outputs.atomic import json_text
+        from optdesign.outputs.checks import prepare_out
+        from optdesign.outputs.figure_process import FigureProcess
+        from optdesign.commands.files import TOLERANCE_FILES, draw_tolerance, write_tolerance
+        from optdesign.problem.loader import load_problem
+        from optdesign.tolerance.parts import box_of
 
-    problem = load_problem(args.problem)
+    with phase("reading"):
+        problem = load_problem(args.problem)
     if "tolerances" not in problem.sections:
         raise UsageError(f"{problem.source}: has no tolerances: section; add one, e.g. "
                          f"tolerances: {{default: 0.05}} (± mm of every length; "
@@ -53,33 +56,45 @@ def run(args) -> int:
         raise UsageError(f"--samples must lie in [1, {MAX_SAMPLES}] (got {args.samples})")
     if args.seed is not None and not 0 <= args.seed <= MAX_SEED:
         raise UsageError(f"--seed must lie in [0, {MAX_SEED}] (got {args.seed})")
-    chosen = chosen_design(args, problem)
+    with phase("reading"):
+        chosen = chosen_design(args, problem)
     values, source = chosen.values, chosen.source
     box = box_of(problem, values, section)
     out = prepare_out(args.out, problem.name, files=TOLERANCE_FILES)      # before any work
-    from tqdm import tqdm
-    with tqdm(total=3, desc="tolerance", unit="stage", file=sys.stderr, disable=None,
-              leave=False) as bar:
-        frame = monte_carlo(problem, box.values, section, args.samples, args.seed)
-        if not frame.attrs["nominal"]["assembles"]:
-            print(f"optdesign: {problem.source}: the nominal design does not assemble; "
-                  f"nothing to analyse", file=sys.stderr)
-            return 1
-        bar.update()
-        worst = frame[frame["assembles"]].nlargest(8, "delta")
-        offsets = worst[[f"{k}_offset_mm" for k in box.names]].to_numpy()
-        worst_delta = worst_case(problem, box.values, section, candidates=offsets)
-        bar.update()
-        least = frame[frame["assembles"]].nsmallest(8, "mu_min_deg")
-        offsets = least[[f"{k}_offset_mm" for k in box.names]].to_numpy()
-        worst_angle = worst_case(problem, box.values, section, quantity="transmission_angle",
-                                 candidates=offsets)
-        bar.update()
-    doc = tolerance_document(problem, box, section, frame, worst_delta, worst_angle, source)
-    files = write_tolerance(doc, frame, out)
-    if args.json:
-        print(json_text(doc))
-    else:
-        print(format_tolerance(doc))
+    # the figures' process imports matplotlib while this one samples the parts
+    with FigureProcess(warm=warm_up) as figures:
+        with phase("imports"):
+            from tqdm import tqdm
+
+            from optdesign.tolerance.montecarlo import monte_carlo
+            from optdesign.tolerance.report import format_tolerance, tolerance_document
+            from optdesign.tolerance.worst_case import worst_case
+        with phase("evaluating"):
+            with tqdm(total=3, desc="tolerance", unit="stage", file=sys.stderr,
+                      disable=None, leave=False) as bar:
+                frame = monte_carlo(problem, box.values, section, args.samples, args.seed)
+                if not frame.attrs["nominal"]["assembles"]:
+                    print(f"optdesign: {problem.source}: the nominal design does not "
+                          f"assemble; nothing to analyse", file=sys.stderr)
+                    return 1
+                bar.update()
+                worst = frame[frame["assembles"]].nlargest(8, "delta")
+                offsets = worst[[f"{k}_offset_mm" for k in box.names]].to_numpy()
+                worst_delta = worst_case(problem, box.values, section, candidates=offsets)
+                bar.update()
+                least = frame[frame["assembles"]].nsmallest(8, "mu_min_deg")
+                offsets = least[[f"{k}_offset_mm" for k in box.names]].to_numpy()
+                worst_angle = worst_case(problem, box.values, section,
+                                         quantity="transmission_angle", candidates=offsets)
+                bar.update()
+            doc = tolerance_document(problem, box, section, frame, worst_delta, worst_angle,
+                                     source)
+        with phase("files"):
+            files = write_tolerance(doc, frame, out, plots=False)
+            print_answer(json_text(doc) if args.json else format_tolerance(doc))
+        with phase("figures"):
+            files += draw_tolerance(doc, frame, out, figures)
+    raise_if_unprinted()
+    if not args.json:
         print(f"wrote {', '.join(str(f) for f in files)}")
     return 0

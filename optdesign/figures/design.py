@@ -20,6 +20,20 @@ def pyplot():
     return plt
 
 
+def warm_up() -> None:
+    """Import pyplot and draw one small figure with text on an Agg canvas of its own (no
+    backend chosen, nothing written): the first figure of a process pays for loading the
+    fonts and the renderer, and a process that draws later
+    (:class:`optdesign.outputs.figure_process.FigureProcess`) pays it while it waits."""
+    pyplot()
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(1, 1))
+    fig.text(0.5, 0.5, "φ1 [deg]")
+    FigureCanvasAgg(fig).draw()
+
+
 def plot_speeds(design, stroke: str, input_speed: float, eccentricity: float = 1.0,
                 ax=None, n_samples: int = 1441, title: str | None = None):
     """Each rocker's driving speed s·ω_k over the crank angle, and the output envelope."""

@@ -48,6 +48,7 @@ def run(args) -> int:
     out = prepare_out(args.out, problem.name, files=tuple(names))
     written = write_animation(problem, out, args.eccentricity, args.frames,
                               movies=tuple(n for n in names if not n.endswith(".html")))
+    answered()
     print(f"design: {chosen.source}")
     print(f"wrote {', '.join(str(p) for p in written)}")
     return 0
@@ -75,8 +76,6 @@ def write_animation(problem, out, eccentricity: float = 1.0, frames: int = 120,
         data = turn(design, problem.stroke, problem.input_speed, eccentricity, frames)
     with phase("files"):
         written = [atomic_write_text(Path(out) / html_name, html_page(data, title))]
-    if movies:
-        answered()                    # the page is there; the movies take their time
     if movies and frames > MOVIE_FRAMES:      # a movie's frames are drawn one by one: fewer
         data = turn(design, problem.stroke, problem.input_speed, eccentricity, MOVIE_FRAMES)
     for name in movies:

@@ -30,6 +30,7 @@ def run(args) -> int:
         from optdesign.outputs.checks import prepare_out
         from optdesign.outputs.figure_process import FigureProcess
         from optdesign.commands.files import write_driveline
+        from optdesign.problem.loader import load_problem  # noqa: F401  (read by loaded())
 
     with phase("reading"):
         problem, chosen = loaded(args, one_count=False)
@@ -38,6 +39,8 @@ def run(args) -> int:
     # the figures' process imports matplotlib while this one evaluates the design
     with FigureProcess(warm=warm_up) as figures:
         with phase("imports"):
+            import scipy.optimize  # noqa: F401  (brentq, first used by the evaluation)
+
             from optdesign.analyses.analyze import analyze
             from optdesign.driveline.report import driveline_report, format_driveline
         with phase("evaluating"):

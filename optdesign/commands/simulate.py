@@ -44,6 +44,7 @@ def run(args) -> int:
         from optdesign.outputs.atomic import json_text
         from optdesign.outputs.checks import prepare_out
         from optdesign.outputs.figure_process import FigureProcess
+        from optdesign.problem.loader import load_problem  # noqa: F401  (read by loaded())
         from optdesign.commands.files import draw_simulation, write_simulation
 
     with phase("reading"):

@@ -64,6 +64,7 @@ def run(args) -> int:
     # the figures' process imports matplotlib while this one samples the parts
     with FigureProcess(warm=warm_up) as figures:
         with phase("imports"):
+            import scipy.optimize  # noqa: F401  (brentq, first used by the evaluation)
             from tqdm import tqdm
 
             from optdesign.tolerance.montecarlo import monte_carlo

@@ -48,6 +48,7 @@ docs-quick: $(STAMP)
 	$(PY) benchmarks/dynamics_paper_case.py
 	$(PY) benchmarks/robust_cost.py
 	$(PY) benchmarks/atlas_scaling.py
+	$(PY) benchmarks/command_latency.py
 	$(PY) benchmarks/docs.py --splice
 
 clean:

@@ -1,29 +1,58 @@
-"""What the user waits for: each command's whole wall time, and how much of it is the work.
+"""What the user waits for: each command's whole wall time, split into its phases.
 
 Each case is run as a user runs it, ``optdesign CMD ...`` in a fresh process, ``--rounds``
-times; the table gives the median wall time, the start-up (``optdesign --version``: the
-interpreter and the command line's imports, the same in every command) and, where the command
-reports it, its own work (``solve``'s ``solve_time_s``); the rest is reading the file,
-importing what the command needs, evaluating, verifying and writing files and figures.
-Writes benchmarks/results/command_latency.md and .json.
+times, round after round (the cases alternate, so a busy moment of a shared machine spreads
+over all of them). Every run is timed from outside (the wall, and the first byte on stdout:
+the printed answer) and, with ``OPTDESIGN_PHASES`` set, from inside
+(:mod:`optdesign.outputs.phases`): the command's phases and the wall clock at its first line.
+A run's wall time is split into
 
-    python benchmarks/command_latency.py [--rounds 3]
+* start-up and imports: the interpreter, the command line and every ``imports`` phase (a
+  library imported inside another phase, e.g. matplotlib by the first figure, counts there);
+* reading: the problem file (and a ``--design`` file) read and checked;
+* solving or evaluating: the solve, the simulation, the exact evaluation;
+* verification: for ``solve``, the exact re-verification of its optima, as the solver
+  reports it (``timings_s``; taken out of the solving);
+* files and figures: the files without a figure, then the figures (drawn beside by the
+  figures' process, waited for);
+* other: the rest (between phases, and the interpreter's exit);
+
+and the answer is when it came: the first byte on stdout. Each column is the median of its
+runs (so the columns need not add up to the median wall). Writes
+benchmarks/results/command_latency.md and .json; with ``--before FILE.json`` (this script's
+JSON of another tree, run with ``PYTHONPATH`` pointing there; by default
+benchmarks/results/command_latency_before.json, the commit before the latency work) a second
+table sets the wall and the answer of both side by side.
+
+    python benchmarks/command_latency.py [--rounds 3] [--before OLD.json|none] [--out FILE.md]
+
+The "before" file was made so, from a worktree of that commit in /tmp/base:
+
+    PYTHONPATH=/tmp/base python benchmarks/command_latency.py --before none \
+        --tree "commit 7b38b25" --out benchmarks/results/command_latency_before.md
+
+``pareto`` is left out: even ``--points 2 --no-report`` on the shipped fronts takes 20-45 s (its
+refinement rounds), more than the whole benchmark.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 PROGRAM = [sys.executable, "-m", "optdesign"]
+#: the same benchmark on the commit before the latency work (7b38b25), for the second table
+BEFORE = RESULTS / "command_latency_before.json"
 
 #: (label, arguments after ``optdesign``; OUT is replaced by a fresh folder)
 CASES = [
@@ -33,59 +62,153 @@ CASES = [
                                 "--json"]),
     ("solve sharkov2022_disc --no-plots", ["solve", "problems/sharkov2022_disc.yaml", "--out",
                                            "OUT", "--json", "--no-plots"]),
-    ("export sharkov2022", ["export", "problems/sharkov2022.yaml", "--out", "OUT"]),
-    ("animate sharkov2022", ["animate", "problems/sharkov2022.yaml", "--out", "OUT"]),
+    ("curves sharkov2022", ["curves", "problems/sharkov2022.yaml", "--out", "OUT"]),
     ("simulate sharkov2022_dynamics", ["simulate", "problems/sharkov2022_dynamics.yaml",
                                        "--out", "OUT"]),
+    ("tolerance sharkov2022_disc_tolerance", ["tolerance",
+                                              "problems/sharkov2022_disc_tolerance.yaml",
+                                              "--out", "OUT"]),
+    ("driveline driveline", ["driveline", "problems/driveline.yaml", "--out", "OUT"]),
+    ("export sharkov2022", ["export", "problems/sharkov2022.yaml", "--out", "OUT"]),
+    ("animate sharkov2022", ["animate", "problems/sharkov2022.yaml", "--out", "OUT"]),
 ]
 
+#: the columns of the split, and the phases each sums
+COLUMNS = {"start-up and imports": ("imports",), "reading": ("reading",),
+           "solving or evaluating": ("solving", "evaluating"), "verification": (),
+           "files": ("files",), "figures": ("figures",)}
+PHASE_VARIABLE = "OPTDESIGN_PHASES"
 
-def run_once(args: list[str]) -> tuple[float, float | None]:
-    """(wall seconds, the command's own reported work in seconds or None) of one run."""
+
+def run_once(args: list[str]) -> dict:
+    """One run: its wall, the first byte on stdout, its phase record (None from a tree
+    without the phase clock) and what ``solve --json`` reports of itself."""
     with tempfile.TemporaryDirectory() as scratch:
-        argv = [scratch if a == "OUT" else a for a in args]
+        argv = [scratch + "/out" if a == "OUT" else a for a in args]
+        log = Path(scratch) / "phases.jsonl"
+        env = os.environ | {PHASE_VARIABLE: str(log)}
+        spawned = time.time()
         t0 = time.perf_counter()
-        done = subprocess.run(PROGRAM + argv, cwd=ROOT, capture_output=True, text=True)
+        proc = subprocess.Popen(PROGRAM + argv, cwd=ROOT, env=env, stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE)
+        err: list[bytes] = []
+        drain = threading.Thread(target=lambda: err.append(proc.stderr.read()), daemon=True)
+        drain.start()
+        first, chunks = None, []
+        while chunk := proc.stdout.read1(1 << 16):
+            if first is None:
+                first = time.perf_counter() - t0
+            chunks.append(chunk)
+        code = proc.wait()
         wall = time.perf_counter() - t0
-    if done.returncode not in (0, 1):
-        raise RuntimeError(f"optdesign {' '.join(args)}: exit {done.returncode}\n"
-                           f"{done.stderr[-2000:]}")
-    work = None
-    if "--json" in args and args[0] == "solve":
-        work = json.loads(done.stdout)["solve_time_s"]
-    return wall, work
+        drain.join()
+        record = json.loads(log.read_text().splitlines()[-1]) if log.exists() else None
+    out = b"".join(chunks).decode("utf-8", "replace")
+    if code not in (0, 1):
+        raise RuntimeError(f"optdesign {' '.join(args)}: exit {code}\n"
+                           f"{b''.join(err).decode('utf-8', 'replace')[-2000:]}")
+    reported = json.loads(out) if "--json" in args and args[0] == "solve" else {}
+    return {"wall_s": wall, "answer_s": first if first is not None else wall,
+            "spawn_to_start_s": record["started"] - spawned if record else None,
+            "phases": record["phases"] if record else None,
+            "exit_s": record["exit_s"] if record else None,
+            "solve_time_s": reported.get("solve_time_s"),
+            "verification_s": (reported.get("timings_s") or {}).get("verification")}
+
+
+def split(run: dict) -> dict[str, float] | None:
+    """The run's wall time by column (None without a phase record)."""
+    if run["phases"] is None:
+        return None
+    phases = run["phases"]
+    spent = {name: sum(end - start for n, start, end in phases if n == name)
+             for name in {p[0] for p in phases}}
+    first = min((start for _, start, _ in phases), default=0.0)
+    out = {column: sum(spent.get(n, 0.0) for n in names) for column, names in COLUMNS.items()}
+    out["start-up and imports"] += run["spawn_to_start_s"] + first
+    verification = min(run["verification_s"] or 0.0, out["solving or evaluating"])
+    out["verification"] = verification if run["verification_s"] is not None else None
+    out["solving or evaluating"] -= verification
+    out["other"] = run["wall_s"] - sum(v or 0.0 for v in out.values())
+    return out
+
+
+def median_row(label: str, argv: list[str], runs: list[dict]) -> dict:
+    splits = [s for s in map(split, runs) if s is not None]
+    row = {"case": label, "command": "optdesign " + " ".join(
+        a if a != "OUT" else "DIR" for a in argv),
+        "wall_s": [r["wall_s"] for r in runs], "answer_s": [r["answer_s"] for r in runs],
+        "median_wall_s": statistics.median(r["wall_s"] for r in runs),
+        "median_answer_s": statistics.median(r["answer_s"] for r in runs),
+        "median_solve_time_s": _median([r["solve_time_s"] for r in runs]),
+        "runs": runs, "median_split_s": None}
+    if splits:
+        row["median_split_s"] = {k: _median([s[k] for s in splits]) for k in splits[0]}
+    return row
+
+
+def _median(values):
+    values = [v for v in values if v is not None]
+    return statistics.median(values) if values else None
+
+
+def _cell(value) -> str:
+    return "-" if value is None else f"{value:.2f}"
+
+
+def tables(rows: list[dict], rounds: int, before: dict | None) -> list[str]:
+    columns = list(COLUMNS) + ["other"]
+    lines = [f"Wall time of each command [s], a fresh process each, median of {rounds} runs, "
+             f"split into its phases (`OPTDESIGN_PHASES`); the answer is the first byte on "
+             f"stdout, the printed result.", "",
+             "| command | wall | answer at | " + " | ".join(columns) + " |",
+             "|---|---|---|" + "---|" * len(columns)]
+    for r in rows:
+        split_ = r["median_split_s"] or {}
+        lines.append(f"| `{r['command']}` | {r['median_wall_s']:.2f} | "
+                     f"{r['median_answer_s']:.2f} | "
+                     + " | ".join(_cell(split_.get(c)) for c in columns) + " |")
+    if before:
+        old = {r["command"]: r for r in before["rows"]}
+        lines += ["", f"Before and now [s] (medians; before: {before['meta'].get('tree', '?')}"
+                      f", {before['meta']['time']}):", "",
+                  "| command | wall before | wall now | answer before | answer now |",
+                  "|---|---|---|---|---|"]
+        for r in rows:
+            b = old.get(r["command"])
+            lines.append(f"| `{r['command']}` | "
+                         f"{_cell(b and b['median_wall_s'])} | {r['median_wall_s']:.2f} | "
+                         f"{_cell(b and b['median_answer_s'])} | "
+                         f"{r['median_answer_s']:.2f} |")
+    return lines
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--before", default=str(BEFORE),
+                    help="this script's JSON of another tree, or 'none' (default: "
+                         "benchmarks/results/command_latency_before.json if there)")
+    ap.add_argument("--out", type=Path, default=RESULTS / "command_latency.md",
+                    help="the results file (its JSON twin beside it)")
+    ap.add_argument("--tree", default="this tree", help="what was measured, for the JSON")
     args = ap.parse_args()
-    rows = []
-    for label, argv in CASES:
-        runs = [run_once(argv) for _ in range(args.rounds)]
-        walls = [w for w, _ in runs]
-        works = [x for _, x in runs if x is not None]
-        rows.append({"case": label, "command": "optdesign " + " ".join(
-            a if a != "OUT" else "DIR" for a in argv), "wall_s": walls,
-            "median_wall_s": statistics.median(walls),
-            "median_work_s": statistics.median(works) if works else None})
-    start = rows[0]["median_wall_s"]
-    lines = [f"Whole wall time of each command [s], a fresh process each, median of "
-             f"{args.rounds} runs; start-up is `optdesign --version` (the interpreter and the "
-             f"command line); the work is what the command reports of itself (`solve_time_s`).",
-             "", "| case | wall (median) | start-up | the command's own work | the rest |",
-             "|---|---|---|---|---|"]
-    for r in rows[1:]:
-        work = r["median_work_s"]
-        rest = r["median_wall_s"] - start - (work or 0.0)
-        lines.append(f"| `{r['command']}` | {r['median_wall_s']:.2f} | {start:.2f} | "
-                     f"{'-' if work is None else f'{work:.2f}'} | {rest:.2f} |")
-    RESULTS.mkdir(exist_ok=True)
+    runs = {label: [] for label, _ in CASES}
+    for _ in range(args.rounds):
+        for label, argv in CASES:
+            runs[label].append(run_once(argv))
+    rows = [median_row(label, argv, runs[label]) for label, argv in CASES]
+    path = Path(args.before) if args.before != "none" else None
+    before = json.loads(path.read_text()) if path and path.is_file() and \
+        path.resolve() != args.out.with_suffix(".json").resolve() else None
+    lines = tables(rows, args.rounds, before)
     meta = {"time": time.strftime("%Y-%m-%d %H:%M:%S"), "python": platform.python_version(),
-            "machine": platform.machine() + " " + platform.system(), "rounds": args.rounds}
-    (RESULTS / "command_latency.md").write_text("\n".join(lines) + "\n")
-    (RESULTS / "command_latency.json").write_text(json.dumps({"meta": meta, "rows": rows},
-                                                             indent=2) + "\n")
+            "machine": platform.machine() + " " + platform.system(),
+            "cores": os.cpu_count(), "rounds": args.rounds, "tree": args.tree}
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text("\n".join(lines) + "\n")
+    args.out.with_suffix(".json").write_text(json.dumps({"meta": meta, "rows": rows},
+                                                        indent=2) + "\n")
     print("\n".join(lines))
     return 0
 

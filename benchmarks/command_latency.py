@@ -19,17 +19,18 @@ A run's wall time is split into
 
 and the answer is when it came: the first byte on stdout. Each column is the median of its
 runs (so the columns need not add up to the median wall). Writes
-benchmarks/results/command_latency.md and .json; with ``--before FILE.json`` (this script's
-JSON of another tree, run with ``PYTHONPATH`` pointing there; by default
-benchmarks/results/command_latency_before.json, the commit before the latency work) a second
-table sets the wall and the answer of both side by side.
+benchmarks/results/command_latency.md and .json. With ``--compare TREE`` every case is run
+on the code of TREE too, right after its run here (a worktree of another commit), and that is
+written as benchmarks/results/command_latency_before.md and .json; a second table sets the
+wall and the answer of both side by side (read from that file when it is there, so a run
+without ``--compare`` keeps the comparison of the last run that made one).
 
-    python benchmarks/command_latency.py [--rounds 3] [--before OLD.json|none] [--out FILE.md]
+    python benchmarks/command_latency.py [--rounds 3] [--compare TREE --compare-name NAME]
 
-The "before" file was made so, from a worktree of that commit in /tmp/base:
+The "before" file is the commit before the latency work, 7b38b25, in a worktree:
 
-    PYTHONPATH=/tmp/base python benchmarks/command_latency.py --before none \
-        --tree "commit 7b38b25" --out benchmarks/results/command_latency_before.md
+    git worktree add /tmp/base 7b38b25
+    python benchmarks/command_latency.py --compare /tmp/base --compare-name "commit 7b38b25"
 
 ``pareto`` is left out: even ``--points 2 --no-report`` on the shipped fronts takes 20-45 s (its
 refinement rounds), more than the whole benchmark.
@@ -51,7 +52,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 PROGRAM = [sys.executable, "-m", "optdesign"]
-#: the same benchmark on the commit before the latency work (7b38b25), for the second table
+#: the tree compared (``--compare``): the commit before the latency work, 7b38b25
 BEFORE = RESULTS / "command_latency_before.json"
 
 #: (label, arguments after ``optdesign``; OUT is replaced by a fresh folder)
@@ -80,16 +81,17 @@ COLUMNS = {"start-up and imports": ("imports",), "reading": ("reading",),
 PHASE_VARIABLE = "OPTDESIGN_PHASES"
 
 
-def run_once(args: list[str]) -> dict:
-    """One run: its wall, the first byte on stdout, its phase record (None from a tree
-    without the phase clock) and what ``solve --json`` reports of itself."""
+def run_once(args: list[str], tree: Path = ROOT) -> dict:
+    """One run of the code in ``tree``: its wall, the first byte on stdout, its phase record
+    (None from a tree without the phase clock) and what ``solve --json`` reports of itself."""
     with tempfile.TemporaryDirectory() as scratch:
         argv = [scratch + "/out" if a == "OUT" else a for a in args]
         log = Path(scratch) / "phases.jsonl"
-        env = os.environ | {PHASE_VARIABLE: str(log)}
+        # `python -m` puts the working folder first on sys.path: the tree's own package runs
+        env = os.environ | {PHASE_VARIABLE: str(log), "PYTHONPATH": str(tree)}
         spawned = time.time()
         t0 = time.perf_counter()
-        proc = subprocess.Popen(PROGRAM + argv, cwd=ROOT, env=env, stdout=subprocess.PIPE,
+        proc = subprocess.Popen(PROGRAM + argv, cwd=tree, env=env, stdout=subprocess.PIPE,
                                 stderr=subprocess.PIPE)
         err: list[bytes] = []
         drain = threading.Thread(target=lambda: err.append(proc.stderr.read()), daemon=True)
@@ -186,31 +188,45 @@ def tables(rows: list[dict], rounds: int, before: dict | None) -> list[str]:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=3)
-    ap.add_argument("--before", default=str(BEFORE),
-                    help="this script's JSON of another tree, or 'none' (default: "
-                         "benchmarks/results/command_latency_before.json if there)")
+    ap.add_argument("--compare", type=Path, metavar="TREE",
+                    help="also run every case on the code of TREE, alternating with this "
+                         "tree's run of it, and write that as the --before file")
+    ap.add_argument("--compare-name", default="the tree compared",
+                    help="what TREE is, for the tables (e.g. 'commit 7b38b25')")
+    ap.add_argument("--before", type=Path, default=BEFORE,
+                    help="the JSON of the tree compared (default: "
+                         "benchmarks/results/command_latency_before.json): written with "
+                         "--compare, read otherwise, if there")
     ap.add_argument("--out", type=Path, default=RESULTS / "command_latency.md",
                     help="the results file (its JSON twin beside it)")
-    ap.add_argument("--tree", default="this tree", help="what was measured, for the JSON")
     args = ap.parse_args()
-    runs = {label: [] for label, _ in CASES}
+    trees = {"now": ROOT} | ({"before": args.compare} if args.compare else {})
+    runs = {(tree, label): [] for tree in trees for label, _ in CASES}
     for _ in range(args.rounds):
         for label, argv in CASES:
-            runs[label].append(run_once(argv))
-    rows = [median_row(label, argv, runs[label]) for label, argv in CASES]
-    path = Path(args.before) if args.before != "none" else None
-    before = json.loads(path.read_text()) if path and path.is_file() and \
-        path.resolve() != args.out.with_suffix(".json").resolve() else None
-    lines = tables(rows, args.rounds, before)
+            for tree, root in trees.items():        # back to back: the same moment's load
+                runs[(tree, label)].append(run_once(argv, root))
+    rows = {tree: [median_row(label, argv, runs[(tree, label)]) for label, argv in CASES]
+            for tree in trees}
     meta = {"time": time.strftime("%Y-%m-%d %H:%M:%S"), "python": platform.python_version(),
             "machine": platform.machine() + " " + platform.system(),
-            "cores": os.cpu_count(), "rounds": args.rounds, "tree": args.tree}
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text("\n".join(lines) + "\n")
-    args.out.with_suffix(".json").write_text(json.dumps({"meta": meta, "rows": rows},
-                                                        indent=2) + "\n")
+            "cores": os.cpu_count(), "rounds": args.rounds}
+    before_json = args.before.with_suffix(".json")
+    if args.compare:
+        _write(before_json.with_suffix(".md"), tables(rows["before"], args.rounds, None),
+               {"meta": meta | {"tree": args.compare_name}, "rows": rows["before"]})
+    before = json.loads(before_json.read_text()) if before_json.is_file() else None
+    lines = tables(rows["now"], args.rounds, before)
+    _write(args.out, lines, {"meta": meta | {"tree": "this tree"}, "rows": rows["now"]})
     print("\n".join(lines))
     return 0
+
+
+def _write(path: Path, lines: list[str], doc: dict) -> None:
+    """A results file (its tables; ``path`` ends .md) and its JSON twin."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("\n".join(lines) + "\n")
+    path.with_suffix(".json").write_text(json.dumps(doc, indent=2) + "\n")
 
 
 if __name__ == "__main__":

@@ -127,3 +127,27 @@ def solved_disc(tmp_path_factory):
                         "--no-plots"])
     assert code == 0
     return out, json.loads((out / "result.json").read_text())
+
+
+def executed_notebook(name: str, monkeypatch, edit=None) -> tuple:
+    """notebooks/NAME run top to bottom in a python3 kernel (installed into this venv when
+    it has none), with this checkout on PYTHONPATH; ``edit(nb)`` may change it first.
+    Returns the notebook and every code cell's outputs."""
+    import sys
+
+    nbformat = pytest.importorskip("nbformat")
+    nbclient = pytest.importorskip("nbclient")
+    from jupyter_client.kernelspec import KernelSpecManager, NoSuchKernel
+    try:
+        KernelSpecManager().get_kernel_spec("python3")
+    except NoSuchKernel:                 # a fresh venv without a kernelspec: install one
+        from ipykernel.kernelspec import install
+        install(prefix=sys.prefix)
+    monkeypatch.setenv("PYTHONPATH", str(ROOT))
+    nb = nbformat.read(ROOT / "notebooks" / name, as_version=4)
+    if edit is not None:
+        edit(nb)
+    client = nbclient.NotebookClient(nb, kernel_name="python3", timeout=120,
+                                     resources={"metadata": {"path": str(ROOT / "notebooks")}})
+    client.execute()
+    return nb, [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])]

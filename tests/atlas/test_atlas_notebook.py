@@ -1,30 +1,14 @@
 """notebooks/design_atlas.ipynb runs top to bottom on the shipped atlas and answers the
 concept questions with the atlas's own numbers."""
-import sys
-
 import pandas as pd
-import pytest
 
-from tests.conftest import ROOT
+from tests.conftest import ROOT, executed_notebook
 
-nbformat = pytest.importorskip("nbformat")
-nbclient = pytest.importorskip("nbclient")
 SHIPPED = ROOT / "benchmarks" / "results" / "atlas_fourbar" / "atlas.csv"
 
 
 def test_the_design_atlas_notebook_answers_from_the_shipped_atlas(monkeypatch):
-    from jupyter_client.kernelspec import KernelSpecManager, NoSuchKernel
-    try:
-        KernelSpecManager().get_kernel_spec("python3")
-    except NoSuchKernel:
-        from ipykernel.kernelspec import install
-        install(prefix=sys.prefix)
-    monkeypatch.setenv("PYTHONPATH", str(ROOT))
-    nb = nbformat.read(ROOT / "notebooks" / "design_atlas.ipynb", as_version=4)
-    client = nbclient.NotebookClient(nb, kernel_name="python3", timeout=120,
-                                     resources={"metadata": {"path": str(ROOT / "notebooks")}})
-    client.execute()
-    outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])]
+    _, outputs = executed_notebook("design_atlas.ipynb", monkeypatch)
     assert not [o for o in outputs if o.get("output_type") == "error"]
     text = "".join(o.get("text", "") for o in outputs)
     # the least count for δ <= 0.1 under 40 deg and ratio >= 0.5, read off the csv here

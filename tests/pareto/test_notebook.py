@@ -1,30 +1,13 @@
 """notebooks/design_space.ipynb runs top to bottom on the small front (no network needed)."""
-import sys
-
-import pytest
-
-from tests.conftest import ROOT
-
-nbformat = pytest.importorskip("nbformat")
-nbclient = pytest.importorskip("nbclient")
+from tests.conftest import executed_notebook
 
 
 def test_design_space_notebook_executes(small_front, small_path, monkeypatch):
-    from jupyter_client.kernelspec import KernelSpecManager, NoSuchKernel
-    try:
-        KernelSpecManager().get_kernel_spec("python3")
-    except NoSuchKernel:                 # a fresh venv without a kernelspec: install one
-        from ipykernel.kernelspec import install
-        install(prefix=sys.prefix)
-    monkeypatch.setenv("PYTHONPATH", str(ROOT))
-    nb = nbformat.read(ROOT / "notebooks" / "design_space.ipynb", as_version=4)
-    inputs = next(c for c in nb.cells if c.cell_type == "code")
-    assert "PROBLEM =" in inputs.source and "FRONT =" in inputs.source
-    inputs.source = f"PROBLEM = {str(small_path)!r}\nFRONT = {str(small_front[1])!r}"
-    client = nbclient.NotebookClient(nb, kernel_name="python3", timeout=120,
-                                     resources={"metadata": {"path": str(ROOT / "notebooks")}})
-    client.execute()
-    outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])]
+    def point_at_the_small_front(nb):
+        inputs = next(c for c in nb.cells if c.cell_type == "code")
+        assert "PROBLEM =" in inputs.source and "FRONT =" in inputs.source
+        inputs.source = f"PROBLEM = {str(small_path)!r}\nFRONT = {str(small_front[1])!r}"
+    nb, outputs = executed_notebook("design_space.ipynb", monkeypatch, point_at_the_small_front)
     assert not [o for o in outputs if o.get("output_type") == "error"]
     text = "".join(o.get("text", "") for o in outputs)
     assert "non-dominated designs, hypervolume" in text and "feasible: True" in text

@@ -78,7 +78,7 @@ def screened_cases(problem, values) -> tuple:
     memo: dict = {}
     corners = _corners(box)
     figures, nominal = evaluate_offsets(problem, box, corners, memo=memo)
-    memo["nominal"] = nominal
+    memo["nominal"], memo["corners"] = nominal, figures
     fine = figures["assembles"]
     picks = (("ripple", int(np.argmax(np.where(fine, figures["delta"], np.inf))), "delta"),
              ("transmission_angle",
@@ -203,7 +203,7 @@ def corner_violations(problem, values, memo: dict | None = None
     length over so small a box. The ratio of every corner is screened on the vectorised
     evaluator (:func:`~optdesign.tolerance.montecarlo.evaluate_offsets`, ``memo`` as there)
     and measured exactly where the screen is within :data:`RATIO_SCREEN_MARGIN` of the floor
-    or fails."""
+    or fails (the screen's figures are ``memo["corners"]`` when a caller has them)."""
     box = box_of(problem, values, problem.sections["tolerances"])
     dims = box.toleranced
     if dims.size > MAX_CORNER_DIMS:
@@ -212,9 +212,9 @@ def corner_violations(problem, values, memo: dict | None = None
     corners = _corners(box)
     near_floor = np.zeros(len(corners), dtype=bool)
     if problem.objective.min_ratio > 0:
-        screened = evaluate_offsets(problem, box, corners, memo=memo,
-                                    nominal=(memo or {}).get("nominal"))[0]["ratio"]
-        near_floor = ~(screened >= problem.objective.min_ratio - TOL_RATIO +
+        screened = (memo or {}).get("corners") or evaluate_offsets(
+            problem, box, corners, memo=memo, nominal=(memo or {}).get("nominal"))[0]
+        near_floor = ~(screened["ratio"] >= problem.objective.min_ratio - TOL_RATIO +
                        RATIO_SCREEN_MARGIN)
     out: dict[str, float] = {}
     for offsets, check_ratio in zip(corners, near_floor):

@@ -86,6 +86,11 @@ def adjacent(position: tuple) -> list[tuple]:
     return out
 
 
+def solved_at(cells: list[Cell], done: dict) -> dict:
+    """The records of the solved cells by their positions on the grid."""
+    return {cells[i].position: r for i, r in done.items()}
+
+
 def neighbours_of(cell: Cell, by_position: dict) -> list[dict]:
     """The optima of the solved feasible cells one step from ``cell`` along any axis."""
     return [by_position[p]["design"] for p in adjacent(cell.position)
@@ -180,7 +185,7 @@ class _Run:
         with that neighbour's optimum): the work spreads from the first cell along the
         chains and across them; only when nothing is in flight does a cell start alone."""
         busy = set(self.running.values())
-        by_position = {self.cells[i].position: r for i, r in self.done.items()}
+        by_position = solved_at(self.cells, self.done)
         waiting = None
         for j, chain in enumerate(self.chains):
             if len(self.running) >= self.limit:
@@ -206,7 +211,7 @@ class _Run:
         """Submit this round's repairs (:func:`looser_than_stricter`); how many."""
         todo = [(i, nb) for i, nb in looser_than_stricter(self.spec, self.cells, self.done)
                 if (i, nb["cell"]) not in self.tried]
-        by_position = {self.cells[i].position: r for i, r in self.done.items()}
+        by_position = solved_at(self.cells, self.done)
         for index, nb in todo:
             self.tried.add((index, nb["cell"]))
             cell = self.cells[index]
@@ -239,7 +244,7 @@ def looser_than_stricter(spec: AtlasSpec, cells: list[Cell], done: dict) -> list
     """(cell index, the neighbour's record) for every solved cell whose δ is worse than that
     of a neighbour one step stricter along a floor axis (:data:`FLOORS`), or which has no
     optimum where that neighbour has one; the best such neighbour per cell."""
-    by_position = {cells[i].position: r for i, r in done.items()}
+    by_position = solved_at(cells, done)
     found: dict = {}
     for k, name in enumerate(spec.axes):
         if name not in FLOORS:
@@ -269,9 +274,14 @@ def _n_workers(ex, workers) -> int:
     return workers or os.cpu_count() or 1
 
 
+def _line_of(journal: Journal, rec: dict) -> str:
+    """Where a resumed record stands: the journal and its line."""
+    return f"{journal.path}: line {journal.line_of.get(tuple(rec['key']), '?')}"
+
+
 def _checked_index(rec: dict, cells: list[Cell], journal: Journal) -> int:
     """The cell a resumed record is of, checked against its key and the grid."""
-    where = f"{journal.path}: line {journal.line_of.get(tuple(rec['key']), '?')}"
+    where = _line_of(journal, rec)
     index = rec.get("cell")
     if not isinstance(index, int) or not 0 <= index < len(cells) or rec["key"][1] != index \
             or not isinstance(rec.get("values"), dict):
@@ -284,7 +294,7 @@ def _reverify(spec: AtlasSpec, cells: list[Cell], done: dict, journal: Journal) 
     """Every resumed feasible record's design evaluated exactly and its figures compared: a
     journal is trusted only where its numbers are its designs' own."""
     for index, rec in done.items():
-        where = f"{journal.path}: line {journal.line_of.get(tuple(rec['key']), '?')}"
+        where = _line_of(journal, rec)
         cell = cells[index]
         if rec["values"] != spec.values_of(cell) or rec["count"] != spec.values_of(cell)[
                 "phases"]:

@@ -309,8 +309,7 @@ class PhaseSolver:
                     iterations=int(stats["iter_count"]),
                     lengths=nlp.lengths_of(x), surrogate=nlp.worst_ripple(x, params, ver.held),
                     multiplier=nlp.multiplier(sol["lam_g"], "min_ratio"),
-                    binding_parts=nlp.binding_scenarios(sol["lam_g"], ver.held)
-                    if nlp.n_scenarios else (),
+                    binding_parts=nlp.binding_scenarios(sol["lam_g"], ver.held),
                     at_window=nlp.at_window_bound(x, lbx, ubx),
                     binding="" if joined else nlp.binding(np.array(sol["g"]).ravel(), lbg, ubg),
                     active=nlp.active_set(problem, x, sol["lam_x"], sol["lam_g"], lbx, ubx))

@@ -18,7 +18,14 @@ A run's wall time is split into
 * other: the rest (between phases, and the interpreter's exit);
 
 and the answer is when it came: the first byte on stdout. Each column is the median of its
-runs (so the columns need not add up to the median wall). Writes
+runs (so the columns need not add up to the median wall).
+
+Each case runs twice in each round, back to back: in a process of its own
+(``OPTDESIGN_SERVER=off``, the first command of a session), and handed to a warm server
+(:mod:`optdesign.warm`, started once before the first round in a folder of the benchmark's,
+stopped after the last). A third table sets the targets against both: ``analyze``'s wall, and
+``solve``'s wall beyond the ``solve_time_s`` it reports itself (the median of each run's own
+difference). Writes
 benchmarks/results/command_latency.md and .json. With ``--compare TREE`` every case is run
 on the code of TREE too, right after its run here (a worktree of another commit), and that is
 written as benchmarks/results/command_latency_before.md and .json; a second table sets the
@@ -79,16 +86,28 @@ COLUMNS = {"start-up and imports": ("imports",), "reading": ("reading",),
            "solving or evaluating": ("solving", "evaluating"), "verification": (),
            "files": ("files",), "figures": ("figures",)}
 PHASE_VARIABLE = "OPTDESIGN_PHASES"
+#: the warm server's folder during the benchmark (a private one of its own)
+WARM_FOLDER = Path(tempfile.gettempdir()) / f"optdesign-bench-{os.getuid()}"
+#: the targets: ``analyze`` of the paper's design, and ``solve`` on the disc problem with its
+#: figures beyond the solve time it reports [s]
+TARGETS = {"analyze sharkov2022": 0.5, "solve sharkov2022_disc": 0.5}
 
 
-def run_once(args: list[str], tree: Path = ROOT) -> dict:
+def setup_env(tree: Path, warm: bool) -> dict:
+    """The environment of a run of ``tree``'s code: with its own warm server (in a folder of
+    the benchmark's), or with none."""
+    # `python -m` puts the working folder first on sys.path: the tree's own package runs
+    env = os.environ | {"PYTHONPATH": str(tree), "OPTDESIGN_SERVER": "on" if warm else "off"}
+    return env | ({"OPTDESIGN_SERVER_DIR": str(WARM_FOLDER)} if warm else {})
+
+
+def run_once(args: list[str], tree: Path = ROOT, warm: bool = False) -> dict:
     """One run of the code in ``tree``: its wall, the first byte on stdout, its phase record
     (None from a tree without the phase clock) and what ``solve --json`` reports of itself."""
     with tempfile.TemporaryDirectory() as scratch:
         argv = [scratch + "/out" if a == "OUT" else a for a in args]
         log = Path(scratch) / "phases.jsonl"
-        # `python -m` puts the working folder first on sys.path: the tree's own package runs
-        env = os.environ | {PHASE_VARIABLE: str(log), "PYTHONPATH": str(tree)}
+        env = setup_env(tree, warm) | {PHASE_VARIABLE: str(log)}
         spawned = time.time()
         t0 = time.perf_counter()
         proc = subprocess.Popen(PROGRAM + argv, cwd=tree, env=env, stdout=subprocess.PIPE,
@@ -158,30 +177,63 @@ def _cell(value) -> str:
     return "-" if value is None else f"{value:.2f}"
 
 
-def tables(rows: list[dict], rounds: int, before: dict | None) -> list[str]:
+def split_table(rows: list[dict], heading: str) -> list[str]:
+    """The medians of each command's wall, answer and phases, under ``heading``."""
     columns = list(COLUMNS) + ["other"]
-    lines = [f"Wall time of each command [s], a fresh process each, median of {rounds} runs, "
-             f"split into its phases (`OPTDESIGN_PHASES`); the answer is the first byte on "
-             f"stdout, the printed result.", "",
-             "| command | wall | answer at | " + " | ".join(columns) + " |",
+    lines = [heading, "", "| command | wall | answer at | " + " | ".join(columns) + " |",
              "|---|---|---|" + "---|" * len(columns)]
     for r in rows:
         split_ = r["median_split_s"] or {}
         lines.append(f"| `{r['command']}` | {r['median_wall_s']:.2f} | "
                      f"{r['median_answer_s']:.2f} | "
                      + " | ".join(_cell(split_.get(c)) for c in columns) + " |")
+    return lines
+
+
+def tables(rows: list[dict], rounds: int, before: dict | None,
+           warm: list[dict] | None = None) -> list[str]:
+    lines = split_table(rows, f"Wall time of each command [s], a fresh process each (no warm "
+                              f"server), median of {rounds} runs, split into its phases "
+                              f"(`OPTDESIGN_PHASES`); the answer is the first byte on stdout, "
+                              f"the printed result.")
+    if warm:
+        lines += [""] + split_table(warm, f"The same commands handed to a warm server "
+                                          f"(`optdesign server start` before the first "
+                                          f"round), median of {rounds} runs:")
+        lines += [""] + target_lines(rows, warm)
     if before:
         old = {r["command"]: r for r in before["rows"]}
+        now = {r["command"]: r for r in warm or []}
         lines += ["", f"Before and now [s] (medians; before: {before['meta'].get('tree', '?')}"
                       f", {before['meta']['time']}):", "",
-                  "| command | wall before | wall now | answer before | answer now |",
-                  "|---|---|---|---|---|"]
+                  "| command | wall before | wall now | wall now, warm | answer before | "
+                  "answer now | answer now, warm |", "|---|---|---|---|---|---|---|"]
         for r in rows:
-            b = old.get(r["command"])
+            b, w = old.get(r["command"]), now.get(r["command"])
             lines.append(f"| `{r['command']}` | "
                          f"{_cell(b and b['median_wall_s'])} | {r['median_wall_s']:.2f} | "
+                         f"{_cell(w and w['median_wall_s'])} | "
                          f"{_cell(b and b['median_answer_s'])} | "
-                         f"{r['median_answer_s']:.2f} |")
+                         f"{r['median_answer_s']:.2f} | {_cell(w and w['median_answer_s'])} |")
+    return lines
+
+
+def target_lines(cold: list[dict], warm: list[dict]) -> list[str]:
+    """The targets, as measured: ``analyze``'s wall; ``solve``'s wall beyond its solve
+    time (both medians of the runs' own differences)."""
+    lines = ["| target | cold | warm | target |", "|---|---|---|---|"]
+    for case, limit in TARGETS.items():
+        got = []
+        for rows in (cold, warm):
+            row = next(r for r in rows if r["case"] == case)
+            if row["median_solve_time_s"] is None:
+                got.append(row["median_wall_s"])
+            else:
+                got.append(statistics.median(r["wall_s"] - r["solve_time_s"]
+                                             for r in row["runs"]))
+        what = ("wall beyond `solve_time_s`" if case.startswith("solve") else "wall")
+        lines.append(f"| `{case}`: {what} | {got[0]:.2f} | {got[1]:.2f} | "
+                     f"<= {limit:g} ({'met' if got[1] <= limit else 'not met'} warm) |")
     return lines
 
 
@@ -200,12 +252,17 @@ def main() -> int:
     ap.add_argument("--out", type=Path, default=RESULTS / "command_latency.md",
                     help="the results file (its JSON twin beside it)")
     args = ap.parse_args()
-    trees = {"now": ROOT} | ({"before": args.compare} if args.compare else {})
+    trees = {"now": (ROOT, False), "warm": (ROOT, True)} | (
+        {"before": (args.compare, False)} if args.compare else {})
     runs = {(tree, label): [] for tree in trees for label, _ in CASES}
-    for _ in range(args.rounds):
-        for label, argv in CASES:
-            for tree, root in trees.items():        # back to back: the same moment's load
-                runs[(tree, label)].append(run_once(argv, root))
+    _server("start")
+    try:
+        for _ in range(args.rounds):
+            for label, argv in CASES:
+                for tree, (root, warm) in trees.items():    # back to back: the same load
+                    runs[(tree, label)].append(run_once(argv, root, warm))
+    finally:
+        _server("stop")
     rows = {tree: [median_row(label, argv, runs[(tree, label)]) for label, argv in CASES]
             for tree in trees}
     meta = {"time": time.strftime("%Y-%m-%d %H:%M:%S"), "python": platform.python_version(),
@@ -216,10 +273,17 @@ def main() -> int:
         _write(before_json.with_suffix(".md"), tables(rows["before"], args.rounds, None),
                {"meta": meta | {"tree": args.compare_name}, "rows": rows["before"]})
     before = json.loads(before_json.read_text()) if before_json.is_file() else None
-    lines = tables(rows["now"], args.rounds, before)
-    _write(args.out, lines, {"meta": meta | {"tree": "this tree"}, "rows": rows["now"]})
+    lines = tables(rows["now"], args.rounds, before, rows["warm"])
+    _write(args.out, lines, {"meta": meta | {"tree": "this tree"}, "rows": rows["now"],
+                             "warm_rows": rows["warm"]})
     print("\n".join(lines))
     return 0
+
+
+def _server(action: str) -> None:
+    """Start (and wait for) or stop this tree's warm server in the benchmark's folder."""
+    subprocess.run(PROGRAM + ["server", action], cwd=ROOT, env=setup_env(ROOT, True),
+                   check=True, stdout=subprocess.DEVNULL)
 
 
 def _write(path: Path, lines: list[str], doc: dict) -> None:

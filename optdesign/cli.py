@@ -8,7 +8,7 @@ mistake (:mod:`optdesign.problem.plausibility`) adds one warning line and goes o
 """
 from __future__ import annotations
 
-from optdesign.outputs import phases  # noqa: F401  (first: its clock starts with the program)
+from optdesign.outputs import phases  # first: its clock starts with the program
 
 import argparse
 import os
@@ -36,6 +36,7 @@ COMMANDS = [
     "optdesign.commands.compare",
     "optdesign.commands.atlas",
     "optdesign.commands.schema",
+    "optdesign.commands.server",
 ]
 
 
@@ -61,6 +62,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run the command of ``argv``. Run as the program (``argv`` None), hand it to the warm
+    server when one is listening (:mod:`optdesign.warm`), else run it here and start one."""
+    if argv is None:
+        code = _delegated()
+        if code is not None:
+            phases.handed_over()
+            _exit_now(code)
     import warnings
 
     args = build_parser().parse_args(argv)
@@ -72,8 +80,30 @@ def main(argv: list[str] | None = None) -> int:
             else shown_before(message, category, *rest, **kw))
         code = _run(args, argv)
     if argv is None:        # run as the `optdesign` program: its work is done
+        from optdesign.warm.client import start_server_if_missing
+        start_server_if_missing()
         _exit_now(code)
     return code
+
+
+def serve_warm() -> None:
+    """The warm server's process (:mod:`optdesign.warm.server`): it runs this command line."""
+    from optdesign.warm import child, server
+    server.main(child.Program(main=main, exit_now=_exit_now, parser=build_parser))
+
+
+def _delegated() -> int | None:
+    """The exit code of the command as the warm server ran it, or None to run it here."""
+    from optdesign.warm import client, place
+
+    try:
+        return client.delegate(sys.argv[1:], phases.started())
+    except place.SettingError as exc:
+        print(one_line(f"optdesign: {exc}"), file=sys.stderr, flush=True)
+        return 2
+    except KeyboardInterrupt:           # Ctrl-C before the command was handed over
+        print("optdesign: interrupted", file=sys.stderr, flush=True)
+        return 130
 
 
 def _exit_now(code: int) -> None:

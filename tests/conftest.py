@@ -8,6 +8,9 @@ import pytest
 import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
+# every command of the suite runs in a process of its own, and none leaves a warm server
+# behind; tests/warm turn the server on for themselves
+os.environ["OPTDESIGN_SERVER"] = "off"
 PAPER = dict(l0=225.0, l1=20.0, l2=225.0, l2_prime=100.0, l3=56.0, phases=6)
 
 

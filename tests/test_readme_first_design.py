@@ -32,7 +32,7 @@ def _optdesign(*args, cwd) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "optdesign", *args], cwd=cwd,
                           capture_output=True, text=True, timeout=300,
                           env={"MPLBACKEND": "Agg", "PATH": "/usr/bin:/bin",
-                               "PYTHONPATH": str(ROOT)})
+                               "PYTHONPATH": str(ROOT), "OPTDESIGN_SERVER": "off"})
 
 
 def test_the_first_design_prints_what_the_readme_shows(tmp_path):

@@ -42,6 +42,29 @@ _answer: list[float] = []
 _registered: list[bool] = []
 
 
+def restart(started: float) -> None:
+    """Count from ``started`` (the wall clock) again, with nothing recorded: the warm
+    server's child runs a command that started in its client (:mod:`optdesign.warm`)."""
+    global _STARTED, _T0, _PID
+    _STARTED = started
+    _T0 = time.perf_counter() - (time.time() - started)
+    _PID = os.getpid()
+    for done in (_phases, _open, _answer):
+        done.clear()
+    _wanted()
+
+
+def handed_over() -> None:
+    """The command ran in another process, which writes its line: this one writes none."""
+    global _PID
+    _PID = -1
+
+
+def started() -> float:
+    """The program's start on the wall clock."""
+    return _STARTED
+
+
 def _now() -> float:
     return time.perf_counter() - _T0
 

@@ -99,8 +99,42 @@ def atomic_savefig(fig, path: str | Path, **kwargs) -> Path:
 
     buf = io.BytesIO()
     fmt = Path(path).suffix.lstrip(".") or "png"
-    fig.savefig(buf, format=fmt, **({"dpi": 120, "bbox_inches": "tight"} | kwargs))
+    options = {"dpi": 120, "bbox_inches": "tight"} | kwargs
+    if options["bbox_inches"] == "tight" and _measurable(fig, fmt):
+        options["bbox_inches"] = padded(content_bbox(fig, options["dpi"]),
+                                        options.pop("pad_inches", None))
+    fig.savefig(buf, format=fmt, **options)
     return atomic_write_bytes(path, buf.getvalue())
+
+
+def _measurable(fig, fmt: str) -> bool:
+    """True when :func:`content_bbox` gives the box savefig's "tight" finds for ``fig``: a
+    PNG of an Agg canvas without a layout engine (whose layout needs savefig's first
+    drawing)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    return (fmt == "png" and isinstance(fig.canvas, FigureCanvasAgg)
+            and fig.get_layout_engine() is None)
+
+
+def content_bbox(fig, dpi: float):
+    """The box [inches] around what ``fig`` shows, measured at ``dpi`` without drawing it:
+    ``savefig(bbox_inches="tight")`` draws a figure twice, once unseen to lay it out and find
+    this box, then to render it; given the box (:func:`padded`), once, to the same pixels."""
+    kept = fig.dpi
+    fig.dpi = dpi
+    try:
+        return fig.get_tightbbox(fig.canvas.get_renderer())
+    finally:
+        fig.dpi = kept
+
+
+def padded(bbox, pad_inches: float | None = None):
+    """``bbox`` with savefig's margin around it (``savefig.pad_inches`` unless given)."""
+    import matplotlib as mpl
+
+    pad = mpl.rcParams["savefig.pad_inches"] if pad_inches is None else pad_inches
+    return bbox.padded(pad)
 
 
 def _jsonable(value):

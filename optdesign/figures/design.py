@@ -266,11 +266,13 @@ def _draw(ax, link: Linkage, angle: float, paths: bool = True) -> None:
         style = {k: v for k, v in LINK_STYLE[role].items() if k != "label"}
         ax.plot(*np.c_[pts[a], pts[b]], solid_capstyle="round",
                 zorder=3 if role == "crank" else 2, **style)      # the crank never hidden
-    for k, xy in pts.items():
-        if k in link.fixed:
-            ax.plot(*xy, "^", ms=9, color="black", zorder=4)
-        else:
-            ax.plot(*xy, "o", ms=5.5, mfc="white", mec="black", mew=1.1, zorder=5)
+    # one line of markers for the fixed pivots, one for the moving joints: each marker drawn
+    # as it would be alone, in the same order (a line's markers are stamped one by one)
+    fixed = [k in link.fixed for k in pts]
+    xy = np.array(list(pts.values()), dtype=float).reshape(-1, 2)
+    ax.plot(*xy[fixed].T, "^", ms=9, color="black", zorder=4)
+    ax.plot(*xy[np.logical_not(fixed)].T, "o", ms=5.5, mfc="white", mec="black", mew=1.1,
+            zorder=5)
 
 
 def _closed(path: np.ndarray) -> np.ndarray:

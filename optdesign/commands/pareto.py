@@ -63,6 +63,8 @@ def _positive(low, high=None):
 
 def run(args) -> int:
     with phase("imports"):
+        from functools import partial
+
         from optdesign.errors import ProblemError
         from optdesign.figures.design import warm_up
         from optdesign.lifetime import exit_on_sigterm
@@ -87,7 +89,7 @@ def run(args) -> int:
     out = prepare_out(args.out, problem.name, "_pareto", files=PARETO_FILES)
     # the report's figures are drawn beside, by a process forked before any thread or worker
     # (a Dask client, the sweep's pool) exists; it imports matplotlib while the sweep runs
-    with FigureProcess(enabled=not args.no_report, warm=warm_up) as figures:
+    with FigureProcess(enabled=not args.no_report, warm=partial(warm_up, problem)) as figures:
         with phase("imports"):
             from optdesign.fronts import sweep
             from optdesign.fronts.files import write_front

@@ -24,6 +24,8 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     with phase("imports"):
+        from functools import partial
+
         from optdesign.commands.files import SOLVE_FILES
         from optdesign.figures.design import warm_up
         from optdesign.outputs.answer import raise_if_unprinted
@@ -35,7 +37,7 @@ def run(args) -> int:
         problem = load_problem(args.problem)
         out = prepare_out(args.out, problem.name, files=SOLVE_FILES)     # before any work
     # the figures' process imports matplotlib while this one imports the solver and solves
-    with FigureProcess(enabled=not args.no_plots, warm=warm_up) as figures:
+    with FigureProcess(enabled=not args.no_plots, warm=partial(warm_up, problem)) as figures:
         with phase("imports"):
             from tqdm import tqdm
 

@@ -96,11 +96,18 @@ def _speeds_png(problem, values: dict, path: Path, title: str) -> Path:
 
 
 def _mechanism_png(problem, values: dict, path: Path, title: str) -> Path:
-    """The linkage of the design ``values`` to scale."""
-    from optdesign.evaluation.design import Design
-    from optdesign.figures.design import plot_mechanism
+    """The linkage of the design ``values`` to scale: the figure of ``plot_mechanism``, in a
+    figures' process rendered in two bands at once (the slowest figure of ``solve``)."""
+    from functools import partial
 
-    return save_figure(plot_mechanism(Design.from_problem(problem, values), title=title), path)
+    from optdesign.evaluation.design import Design
+    from optdesign.figures.design import BANDS, mechanism_figure
+    from optdesign.outputs.figure_process import beside
+    from optdesign.outputs.split_figure import save_split
+
+    design = Design.from_problem(problem, values)
+    return save_split(partial(mechanism_figure, design, title=title), BANDS, path,
+                      split=beside())
 
 
 # --------------------------------------------------------------------------- pareto

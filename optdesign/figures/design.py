@@ -184,33 +184,63 @@ def plot_mechanism(design, angles_deg=(0, 90, 180, 270), eccentricity: float = 1
     angle. With ``axes`` (one per angle): the full drawing in each, the legend and the
     lengths in the first. Returns the figure.
     """
+    if axes is None:
+        return mechanism_figure(design, angles_deg, eccentricity, title)
+    angles = list(angles_deg)
+    link = linkage(design, eccentricity)
+    axes = np.atleast_1d(axes)
+    for ax, angle in zip(axes, angles):
+        _draw(ax, link, angle)
+        _frame(ax, link, f"φ1 = {angle:g}°")
+        _name_joints(ax, link, angle, link.names)
+    axes[0].legend(handles=_legend_handles(link, design, eccentricity), fontsize=7,
+                   loc="best")
+    axes[0].text(0.01, 0.01, _lengths_text(design, eccentricity), fontsize=7,
+                 family="monospace", transform=axes[0].transAxes, va="bottom",
+                 bbox={"fc": "white", "ec": "0.6", "alpha": 0.9})
+    if title:
+        axes[0].figure.suptitle(title, fontsize=11)
+    return axes[0].figure
+
+
+#: the bands of :func:`plot_mechanism`'s own figure, one above the other: the drawing at the
+#: first angle with its detail, legend and table (and the title); the small drawings
+BANDS = ("upper", "lower")
+
+
+def mechanism_figure(design, angles_deg=(0, 90, 180, 270), eccentricity: float = 1.0,
+                     title: str | None = None, bands=BANDS):
+    """:func:`plot_mechanism`'s figure of its own, or only the panels of ``bands`` (a part of
+    :data:`BANDS`), each where it is in the whole figure: the bands can be drawn by two
+    processes at once and joined (:func:`optdesign.figures.parts.save_in_two`)."""
     plt = pyplot()
     angles = list(angles_deg)
     link = linkage(design, eccentricity)
-    if axes is not None:
-        axes = np.atleast_1d(axes)
-        for ax, angle in zip(axes, angles):
-            _draw(ax, link, angle)
-            _frame(ax, link, f"φ1 = {angle:g}°")
-            _name_joints(ax, link, angle, link.names)
-        axes[0].legend(handles=_legend_handles(link, design, eccentricity), fontsize=7,
-                       loc="best")
-        axes[0].text(0.01, 0.01, _lengths_text(design, eccentricity), fontsize=7,
-                     family="monospace", transform=axes[0].transAxes, va="bottom",
-                     bbox={"fc": "white", "ec": "0.6", "alpha": 0.9})
-        if title:
-            axes[0].figure.suptitle(title, fontsize=11)
-        return axes[0].figure
     lo, hi = link.bounds()
     reach = link.crank_reach()
     zoom = 0 < reach < ZOOM_BELOW * float(np.max(hi - lo))
-    pose = link.at(angles[0])
+    fig, panels = _panels(plt, (hi - lo)[1] / max((hi - lo)[0], 1e-9), zoom, len(angles) - 1,
+                          bands)
+    if "upper" in bands:
+        _upper_band(fig, panels, link, design, angles[0], eccentricity, zoom, title)
+    for ax, angle in zip(panels["thumbs"], angles[1:]):
+        _draw(ax, link, angle, paths=False)
+        _frame(ax, link, f"φ1 = {angle:g}°", small=True)
+    return fig
+
+
+def _upper_band(fig, panels, link: Linkage, design, angle: float, eccentricity: float,
+                zoom: bool, title: str | None) -> None:
+    """The drawing at ``angle`` (the crank detail with ``zoom``), the legend, the lengths
+    and the title."""
+    lo, hi = link.bounds()
+    reach = link.crank_reach()
+    pose = link.at(angle)
     pivot = pose.get(link.crank_pivot, np.zeros(2))
     window = (pivot - 3 * reach, pivot + 3 * reach)
-    fig, panels = _panels(plt, (hi - lo)[1] / max((hi - lo)[0], 1e-9), zoom, len(angles) - 1)
     main = panels["main"]
-    _draw(main, link, angles[0])
-    _frame(main, link, f"φ1 = {angles[0]:g}°",
+    _draw(main, link, angle)
+    _frame(main, link, f"φ1 = {angle:g}°",
            window=(np.fmin(lo, window[0]), np.fmax(hi, window[1])) if zoom else None)
     inside = [k for k, xy in pose.items()
               if zoom and np.all(np.abs(xy - pivot) < 3 * reach)]
@@ -218,30 +248,27 @@ def plot_mechanism(design, angles_deg=(0, 90, 180, 270), eccentricity: float = 1
         from matplotlib.patches import Rectangle
 
         detail = panels["detail"]
-        _draw(detail, link, angles[0])
+        _draw(detail, link, angle)
         _frame(detail, link, "crank detail", window=window)
         main.add_patch(Rectangle(window[0], *(window[1] - window[0]), fill=False, ec="0.35",
                                  lw=0.9, ls="--", zorder=3))
         main.annotate("crank detail", (window[1][0], window[0][1]), fontsize=7.5,
                       color="0.35", xytext=(2, 2), textcoords="offset points", va="bottom")
-        _name_joints(detail, link, angles[0], inside, centre=pivot)
-    _name_joints(main, link, angles[0], [k for k in link.names if k not in inside],
+        _name_joints(detail, link, angle, inside, centre=pivot)
+    _name_joints(main, link, angle, [k for k in link.names if k not in inside],
                  avoid=[pose[k] for k in inside])
     panels["keys"].axis("off")
     panels["keys"].legend(handles=_legend_handles(link, design, eccentricity),
                           loc="center left", fontsize=8.5, frameon=False)
     _lengths_table(panels["table"], design, eccentricity)
-    for ax, angle in zip(panels["thumbs"], angles[1:]):
-        _draw(ax, link, angle, paths=False)
-        _frame(ax, link, f"φ1 = {angle:g}°", small=True)
     fig.suptitle(title or f"{design.mechanism}, {design.model.count_variable} = "
                           f"{design.count}", fontsize=12, y=1 - 0.25 / fig.get_figheight())
-    return fig
 
 
-def _panels(plt, aspect: float, zoom: bool, n_thumbs: int):
+def _panels(plt, aspect: float, zoom: bool, n_thumbs: int, bands=BANDS):
     """The figure and its axes: the main drawing, the crank detail (with ``zoom``), the
-    legend, the lengths table and ``n_thumbs`` small drawings.
+    legend, the lengths table (the upper band) and ``n_thumbs`` small drawings (the lower),
+    of the ``bands`` asked for (the others' places left empty).
 
     Sizes follow the drawing's height/width ``aspect``: a round converter gets the side
     column beside it, a flat slotted lever the detail, legend and table in a row below.
@@ -258,16 +285,17 @@ def _panels(plt, aspect: float, zoom: bool, n_thumbs: int):
                              width_ratios=None if flat else [2.2, 1], left=0.06, right=0.98,
                              bottom=0.05, top=1 - 0.8 / fig.get_figheight(),
                              wspace=0.14, hspace=0.25)
-    n_side = 3 if zoom else 2
-    side = (outer[1, 0].subgridspec(1, n_side, wspace=0.3) if flat else
-            outer[0, 1].subgridspec(n_side, 1, hspace=0.3,
-                                    height_ratios=[1.3, 0.75, 0.8] if zoom else [1, 1]))
-    panels = {"main": fig.add_subplot(outer[0, 0]),
-              "keys": fig.add_subplot(side[-2]), "table": fig.add_subplot(side[-1]),
-              "thumbs": []}
-    if zoom:
-        panels["detail"] = fig.add_subplot(side[0])
-    if n_thumbs:
+    panels = {"thumbs": []}
+    if "upper" in bands:
+        n_side = 3 if zoom else 2
+        side = (outer[1, 0].subgridspec(1, n_side, wspace=0.3) if flat else
+                outer[0, 1].subgridspec(n_side, 1, hspace=0.3,
+                                        height_ratios=[1.3, 0.75, 0.8] if zoom else [1, 1]))
+        panels |= {"main": fig.add_subplot(outer[0, 0]),
+                   "keys": fig.add_subplot(side[-2]), "table": fig.add_subplot(side[-1])}
+        if zoom:
+            panels["detail"] = fig.add_subplot(side[0])
+    if n_thumbs and "lower" in bands:
         row = outer[-1, :].subgridspec(1, max(n_thumbs, 3), wspace=0.25)
         panels["thumbs"] = [fig.add_subplot(row[j]) for j in range(n_thumbs)]
     return fig, panels

@@ -37,6 +37,14 @@ from optdesign.lifetime import die_with_parent
 #: one figure: a module-level function (a forked process finds it by name), its arguments
 Job = tuple  # (Callable, tuple, dict)
 _LENGTH = struct.Struct("!Q")
+_beside: list[bool] = []             # [True] in a process forked to draw
+
+
+def beside() -> bool:
+    """True in a process a :class:`FigureProcess` forked to draw figures: one that may fork
+    again (it runs no thread of the command's), e.g. to render one figure in two halves
+    (:mod:`optdesign.outputs.split_figure`)."""
+    return bool(_beside)
 
 
 class FigureProcess:
@@ -153,6 +161,7 @@ class FigureProcess:
 def _serve(jobs_r: int, results_w: int, warm) -> None:
     """Warm up, wait for the jobs, draw them (each but the last in a process of its own),
     send back every outcome."""
+    _beside.append(True)
     if warm is not None:
         try:
             warm()

@@ -1,0 +1,75 @@
+"""Figures saved faster and pixel for pixel the same: the tight box measured without drawing
+(optdesign.outputs.atomic), and the mechanism drawing rendered as two bands by two processes
+and joined (optdesign.outputs.split_figure)."""
+import io
+from functools import partial
+
+import matplotlib
+import numpy as np
+import pytest
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+from PIL import Image  # noqa: E402
+
+from optdesign.evaluation.design import Design  # noqa: E402
+from optdesign.figures.design import (BANDS, mechanism_figure, plot_mechanism,  # noqa: E402
+                                      plot_speeds)
+from optdesign.outputs import split_figure  # noqa: E402
+from optdesign.outputs.atomic import atomic_savefig  # noqa: E402
+from optdesign.outputs.split_figure import save_split  # noqa: E402
+from tests.test_figures import DESIGNS  # noqa: E402
+
+
+@pytest.fixture(autouse=True)
+def close_figures():
+    yield
+    plt.close("all")
+
+
+def _pixels(data: bytes) -> np.ndarray:
+    return np.asarray(Image.open(io.BytesIO(data)))
+
+
+def _tight(fig) -> np.ndarray:
+    """The pixels savefig writes with its own "tight" (drawing the figure twice)."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=120, bbox_inches="tight")
+    return _pixels(buf.getvalue())
+
+
+@pytest.mark.parametrize("mechanism", sorted(DESIGNS))
+def test_the_figures_saved_with_the_box_measured_beforehand_are_the_tight_ones(mechanism,
+                                                                              tmp_path):
+    design = Design(mechanism, DESIGNS[mechanism])
+    for plot in (partial(plot_mechanism, design), partial(plot_speeds, design, "forward", 97.0)):
+        path = atomic_savefig(plot(), tmp_path / "fig.png")
+        assert np.array_equal(_pixels(path.read_bytes()), _tight(plot()))
+
+
+@pytest.mark.parametrize("mechanism", sorted(DESIGNS))
+def test_the_mechanism_drawing_in_two_bands_has_the_pixels_of_the_whole(mechanism, tmp_path):
+    build = partial(mechanism_figure, Design(mechanism, DESIGNS[mechanism]), title="t")
+    joined = split_figure._joined(build, BANDS, 120)
+    assert joined is not None                      # the bands were drawn apart and joined
+    whole = _tight(build())
+    assert np.array_equal(joined, whole)
+    path = save_split(build, BANDS, tmp_path / "mechanism.png", split=True)
+    assert np.array_equal(_pixels(path.read_bytes()), whole)
+
+
+def _overlapping(bands=("left", "right")):
+    """Two panels whose boxes overlap: no row between them to join at."""
+    fig = plt.figure(figsize=(4, 3))
+    for name, rect in (("left", (0.1, 0.1, 0.5, 0.8)), ("right", (0.4, 0.2, 0.5, 0.7))):
+        if name in bands:
+            ax = fig.add_axes(rect)
+            ax.plot([0, 1], [1, 0] if name == "right" else [0, 1])
+            ax.set_title(name)
+    return fig
+
+
+def test_bands_with_no_gap_between_them_are_drawn_whole(tmp_path):
+    assert split_figure._joined(_overlapping, ("left", "right"), 120) is None
+    path = save_split(_overlapping, ("left", "right"), tmp_path / "f.png", split=True)
+    assert np.array_equal(_pixels(path.read_bytes()), _tight(_overlapping()))

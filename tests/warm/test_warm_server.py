@@ -88,6 +88,8 @@ def test_a_solve_run_warm_writes_the_same_set_with_the_same_modes(warm, tmp_path
     assert hot["design"] == cold["design"] and hot["status"] == cold["status"] == "optimal"
     assert hot_modes == cold_modes and "mechanism.png" in hot_modes
     assert all(mode & 0o007 == 0 for mode in hot_modes.values())      # the umask 027
+    for name in ("mechanism.png", "speeds.png", "animation.html"):       # drawn the same
+        assert (work / "hot" / name).read_bytes() == (work / "cold" / name).read_bytes()
 
 
 def test_ctrl_c_reaches_the_command_and_ends_it_as_interrupted(warm, tmp_path):

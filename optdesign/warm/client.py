@@ -5,8 +5,9 @@ the same fingerprint (:mod:`optdesign.warm.place`) and returns its exit code; it
 when the command is to run in this process: no server, another fingerprint, the server off
 (``OPTDESIGN_SERVER=off``), or anything unusual (a closed standard stream, a working folder
 that cannot be opened). While the child runs, Ctrl-C, SIGTERM, SIGHUP and SIGQUIT received
-here are sent to the child's process group, as a terminal sends them to a program's; if this
-process dies, the child is ended by SIGTERM (:mod:`optdesign.warm.child`).
+here are sent to the child's process group, as a terminal sends them to a program's, and
+Ctrl-Z stops the child with this process (``fg`` and ``bg`` go on with both); if this process
+dies, the child is ended by SIGTERM (:mod:`optdesign.warm.child`).
 
 After a command that found no server, :func:`start_server_if_missing` starts one in the
 background for the next command. Nothing here imports more than the standard library.

@@ -10,6 +10,7 @@ installation's fingerprint; it then ends), and for ``status`` one JSON line.
 from __future__ import annotations
 
 import json
+import os
 import socket
 import struct
 
@@ -62,7 +63,6 @@ def _exactly(sock: socket.socket, n: int) -> bytes:
 
 
 def _close(fd: int) -> None:
-    import os
     try:
         os.close(fd)
     except OSError:

@@ -92,15 +92,21 @@ def test_a_solve_run_warm_writes_the_same_set_with_the_same_modes(warm, tmp_path
         assert (work / "hot" / name).read_bytes() == (work / "cold" / name).read_bytes()
 
 
-def test_ctrl_c_reaches_the_command_and_ends_it_as_interrupted(warm, tmp_path):
+def _slow_solve(env, tmp_path) -> subprocess.Popen:
+    """A solve of about ten seconds, two seconds under way."""
     problem = tmp_path / "slow.yaml"
     data = yaml.safe_load((ROOT / "problems" / "sharkov2022_disc.yaml").read_text())
     data["solver"] = SLOW
     problem.write_text(yaml.safe_dump(data))
     proc = subprocess.Popen([*PROGRAM, "solve", str(problem), "--out", str(tmp_path / "o")],
-                            env=warm, cwd=ROOT, stdout=subprocess.PIPE,
+                            env=env, cwd=ROOT, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     time.sleep(2.0)
+    return proc
+
+
+def test_ctrl_c_reaches_the_command_and_ends_it_as_interrupted(warm, tmp_path):
+    proc = _slow_solve(warm, tmp_path)
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, err
@@ -110,14 +116,7 @@ def test_ctrl_c_reaches_the_command_and_ends_it_as_interrupted(warm, tmp_path):
 
 
 def test_a_killed_client_ends_its_command(warm, tmp_path):
-    problem = tmp_path / "slow.yaml"
-    data = yaml.safe_load((ROOT / "problems" / "sharkov2022_disc.yaml").read_text())
-    data["solver"] = SLOW
-    problem.write_text(yaml.safe_dump(data))
-    proc = subprocess.Popen([*PROGRAM, "solve", str(problem), "--out", str(tmp_path / "o")],
-                            env=warm, cwd=ROOT, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL)
-    time.sleep(2.0)
+    proc = _slow_solve(warm, tmp_path)
     assert _status(warm)["commands_running"] == 1
     proc.kill()
     proc.wait()
@@ -125,19 +124,6 @@ def test_a_killed_client_ends_its_command(warm, tmp_path):
     while _status(warm)["commands_running"] and time.monotonic() < deadline:
         time.sleep(0.2)
     assert _status(warm)["commands_running"] == 0
-
-
-def test_a_client_of_another_environment_runs_alone_and_the_stale_server_ends(tmp_path):
-    env = _env(tmp_path / "s")
-    assert _run(["server", "start"], env).returncode == 0
-    first = _status(env)["pid"]
-    run, served = _served_by(["--version"], env | {"MPLBACKEND": "svg"}, tmp_path)
-    assert run.returncode == 0 and not served
-    deadline = time.monotonic() + 10
-    while _alive(first) and time.monotonic() < deadline:
-        time.sleep(0.1)
-    assert not _alive(first)
-    _run(["server", "stop"], env | {"MPLBACKEND": "svg"})     # the one that run started
 
 
 def test_a_folder_others_may_enter_or_a_link_is_never_used(tmp_path):
@@ -150,7 +136,7 @@ def test_a_folder_others_may_enter_or_a_link_is_never_used(tmp_path):
     link.symlink_to(private)
     for folder in (shared, link):
         env = _env(folder)
-        run, served = _served_by(["analyze", "problems/sharkov2022.yaml"], env, tmp_path)
+        run, served = _served_by(["--version"], env, tmp_path)
         assert run.returncode == 0 and not served
         start = _run(["server", "start"], env)
         assert start.returncode == 1 and "mode 0700, not a link" in start.stderr
@@ -166,30 +152,40 @@ def test_a_bad_setting_is_one_line_and_exit_2(tmp_path):
     assert off.returncode == 2 and len(off.stderr.strip().splitlines()) == 1
 
 
-def test_an_idle_server_ends_and_removes_its_socket(tmp_path):
-    env = _env(tmp_path / "s", OPTDESIGN_SERVER_IDLE="1")
-    assert _run(["server", "start"], env).returncode == 0
-    deadline = time.monotonic() + 20
-    while _status(env) is not None and time.monotonic() < deadline:
-        time.sleep(0.2)
-    assert _status(env) is None
-    assert not list((tmp_path / "s").glob("*.sock"))
-
-
-def test_a_command_that_finds_no_server_starts_one(tmp_path):
-    env = _env(tmp_path / "s")
+def test_a_command_that_finds_no_server_starts_one_which_ends_when_idle(tmp_path):
+    env = _env(tmp_path / "s", OPTDESIGN_SERVER_IDLE="4")
     assert _status(env) is None
     run, served = _served_by(["analyze", "problems/sharkov2022.yaml"], env, tmp_path)
     assert run.returncode == 0 and not served
     deadline = time.monotonic() + 60
     while (_status(env) is None) and time.monotonic() < deadline:
-        time.sleep(0.2)
+        time.sleep(0.1)
     try:
         assert _status(env) is not None
         again, served = _served_by(["analyze", "problems/sharkov2022.yaml"], env, tmp_path)
         assert served and again.stdout == run.stdout
+        deadline = time.monotonic() + 30      # four seconds without a command: it ends
+        while _status(env) is not None and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert _status(env) is None
+        assert not list((tmp_path / "s").glob("*.sock"))
     finally:
         _run(["server", "stop"], env)
+
+
+def test_a_client_of_another_environment_runs_alone_and_the_stale_server_ends(warm,
+                                                                              tmp_path):
+    """Last of the module: it ends the module's server."""
+    assert _run(["server", "start"], warm).returncode == 0      # started again if need be
+    first = _status(warm)["pid"]
+    other = warm | {"MPLBACKEND": "svg"}
+    run, served = _served_by(["--version"], other, tmp_path)
+    assert run.returncode == 0 and not served
+    deadline = time.monotonic() + 10
+    while _alive(first) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not _alive(first)
+    _run(["server", "stop"], other)         # the one that run started, for its environment
 
 
 def _status(env) -> dict | None:

@@ -102,12 +102,12 @@ def _mechanism_png(problem, values: dict, path: Path, title: str) -> Path:
 
     from optdesign.evaluation.design import Design
     from optdesign.figures.design import BANDS, mechanism_figure
-    from optdesign.outputs.figure_process import beside
+    from optdesign.outputs.figure_process import in_figures_process
     from optdesign.outputs.split_figure import save_split
 
     design = Design.from_problem(problem, values)
     return save_split(partial(mechanism_figure, design, title=title), BANDS, path,
-                      split=beside())
+                      split=in_figures_process())
 
 
 # --------------------------------------------------------------------------- pareto

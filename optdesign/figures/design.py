@@ -212,7 +212,7 @@ def mechanism_figure(design, angles_deg=(0, 90, 180, 270), eccentricity: float =
                      title: str | None = None, bands=BANDS):
     """:func:`plot_mechanism`'s figure of its own, or only the panels of ``bands`` (a part of
     :data:`BANDS`), each where it is in the whole figure: the bands can be drawn by two
-    processes at once and joined (:func:`optdesign.figures.parts.save_in_two`)."""
+    processes at once and joined (:func:`optdesign.outputs.split_figure.save_split`)."""
     plt = pyplot()
     angles = list(angles_deg)
     link = linkage(design, eccentricity)
@@ -222,7 +222,8 @@ def mechanism_figure(design, angles_deg=(0, 90, 180, 270), eccentricity: float =
     fig, panels = _panels(plt, (hi - lo)[1] / max((hi - lo)[0], 1e-9), zoom, len(angles) - 1,
                           bands)
     if "upper" in bands:
-        _upper_band(fig, panels, link, design, angles[0], eccentricity, zoom, title)
+        _upper_band(fig, panels, link, design, angles[0], eccentricity, (lo, hi, reach),
+                    title)
     for ax, angle in zip(panels["thumbs"], angles[1:]):
         _draw(ax, link, angle, paths=False)
         _frame(ax, link, f"φ1 = {angle:g}°", small=True)
@@ -230,11 +231,12 @@ def mechanism_figure(design, angles_deg=(0, 90, 180, 270), eccentricity: float =
 
 
 def _upper_band(fig, panels, link: Linkage, design, angle: float, eccentricity: float,
-                zoom: bool, title: str | None) -> None:
-    """The drawing at ``angle`` (the crank detail with ``zoom``), the legend, the lengths
-    and the title."""
-    lo, hi = link.bounds()
-    reach = link.crank_reach()
+                extent: tuple, title: str | None) -> None:
+    """The drawing at ``angle`` (the crank detail where its panel is), the legend, the
+    lengths and the title; ``extent``: the linkage's bounds and crank reach, as measured for
+    the panels."""
+    lo, hi, reach = extent
+    zoom = "detail" in panels
     pose = link.at(angle)
     pivot = pose.get(link.crank_pivot, np.zeros(2))
     window = (pivot - 3 * reach, pivot + 3 * reach)

@@ -40,7 +40,7 @@ _LENGTH = struct.Struct("!Q")
 _beside: list[bool] = []             # [True] in a process forked to draw
 
 
-def beside() -> bool:
+def in_figures_process() -> bool:
     """True in a process a :class:`FigureProcess` forked to draw figures: one that may fork
     again (it runs no thread of the command's), e.g. to render one figure in two halves
     (:mod:`optdesign.outputs.split_figure`)."""

@@ -4,8 +4,9 @@ Each frame is the linkage at one crank angle (:func:`~optdesign.figures.design.l
 rocker that drives the output there highlighted: the member whose driving speed s·dθ_k/dφ is
 the envelope's (Sharkov & Kalinin 2022, eqs. 5-8), beside the output speed over the turn with
 the frame's angle marked. The HTML page holds its data and its script inline (no file or
-network beside it) and draws with SVG; the GIF is drawn by matplotlib (Pillow's writer), and an
-MP4 with it when ffmpeg is on the PATH.
+network beside it) and draws with SVG; the GIF is drawn by matplotlib and written by Pillow, as
+matplotlib's PillowWriter writes it (its frames rendered by two processes at once), and an MP4
+with matplotlib's ffmpeg writer when ffmpeg is on the PATH.
 """
 from __future__ import annotations
 
@@ -201,7 +202,7 @@ def movie(data: Turn, title: str, path, fps: int = 24) -> None:
     """The turn as a GIF (``path`` ending .gif) or an MP4 (.mp4, needs ffmpeg), drawn by
     matplotlib: the linkage on the left, the speeds on the right."""
     import matplotlib
-    from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
+    from matplotlib.animation import FFMpegWriter, FuncAnimation
 
     from optdesign.figures.design import pyplot
 
@@ -251,10 +252,45 @@ def movie(data: Turn, title: str, path, fps: int = 24) -> None:
     # the canvas to redraw after each frame, and an Agg canvas renders the whole figure again
     # for nothing shown (half the movie's time): this figure is never shown, so it does not.
     fig.canvas.draw_idle = lambda *args, **kwargs: None
-    animation = FuncAnimation(fig, frame, frames=len(data.phi_deg), blit=False)
-    writer = PillowWriter(fps=fps) if str(path).endswith(".gif") else FFMpegWriter(fps=fps)
-    animation.save(str(path), writer=writer)
-    plt.close(fig)
+    try:
+        if str(path).endswith(".gif"):
+            _gif(fig, frame, len(data.phi_deg), path, fps)
+        else:
+            FuncAnimation(fig, frame, frames=len(data.phi_deg), blit=False).save(
+                str(path), writer=FFMpegWriter(fps=fps))
+    finally:
+        plt.close(fig)
+
+
+def _gif(fig, draw_frame, count: int, path, fps: int) -> None:
+    """The GIF of frames ``0 .. count - 1`` (``draw_frame(f)`` sets the figure to frame f), the
+    file matplotlib's PillowWriter writes, byte for byte, in about half its time: the frames
+    are rendered and reduced to their palettes by two processes at once, the first half here
+    and the second in a child forked beside (:func:`optdesign.lifetime.beside`; here too where
+    no child can be forked), and Pillow writes them as one file, as PillowWriter does."""
+    from optdesign.lifetime import beside
+
+    half = (count + 1) // 2
+    second = beside(_palette_frames, fig, draw_frame, range(half, count), fps)
+    frames = _palette_frames(fig, draw_frame, range(half), fps) + second()
+    frames[0].save(path, save_all=True, append_images=frames[1:], duration=int(1000 / fps),
+                   loop=0)
+
+
+def _palette_frames(fig, draw_frame, indices, fps: int) -> list:
+    """The frames ``indices`` as matplotlib's PillowWriter renders them, each reduced to the
+    adaptive palette Pillow's GIF writer gives an opaque RGBA frame: the images it writes."""
+    from matplotlib.animation import FuncAnimation, PillowWriter
+    from PIL import Image
+
+    class Kept(PillowWriter):
+        def finish(self):                       # the frames stay, no file is written
+            pass
+
+    kept = Kept(fps=fps)
+    FuncAnimation(fig, draw_frame, frames=list(indices), blit=False).save(
+        "frames.gif", writer=kept)
+    return [im.convert("P", palette=Image.Palette.ADAPTIVE) for im in kept._frames]
 
 
 def _width(role: str) -> float:

@@ -359,8 +359,12 @@ def test_ctrl_c_during_parallel_polishes_is_one_line_and_no_worker_left(tmp_path
                              str(tmp_path / "o"), "--no-plots"], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             start_new_session=True)
-    time.sleep(2.0)                            # the first counts' basins are being polished
-    children = [c.pid for c in psutil.Process(proc.pid).children(recursive=True)]
+    children, deadline = [], time.monotonic() + 60
+    while not children and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)                       # until the first basins are being polished
+        children = [c.pid for c in psutil.Process(proc.pid).children(recursive=True)]
+    assert children, "the solve ended, or forked no worker within a minute"
+    time.sleep(0.2)
     os.killpg(proc.pid, signal.SIGINT)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130

@@ -11,7 +11,9 @@ go on computing (or wait forever on a queue nobody writes to). Two guards, both 
 
 A SIGTERM to the parent is turned into ``SystemExit`` (:func:`exit_on_sigterm`), so ``finally``
 blocks run: a pool terminates its workers and a half-written output set is removed, as on
-Ctrl-C.
+Ctrl-C. Neither is lost: both are held while a child is forked (:func:`signals_held`), and
+one whose exception Python or CasADi drops is raised again (:func:`raise_if_terminated`,
+:func:`interrupts_kept`).
 """
 from __future__ import annotations
 
@@ -20,9 +22,12 @@ import signal
 import sys
 import threading
 from contextlib import contextmanager
+from functools import partial
 
 #: seconds between two checks of the watchdog
 WATCH_INTERVAL_S = 0.5
+#: the signals held while a child is forked (:func:`signals_held`)
+HELD = (signal.SIGINT, signal.SIGTERM)
 _PR_SET_PDEATHSIG = 1
 
 
@@ -42,12 +47,40 @@ def die_with_parent(parent_pid: int | None = None) -> None:
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     except ValueError:                         # not the main thread: nothing inherited there
         pass
+    _release(HELD)                             # forked with them held: see signals_held
     by_kernel = _kill_me_when_parent_dies()
     if os.getppid() != parent_pid:             # the parent died before the guard was set
         os._exit(1)
     if not by_kernel:
         threading.Thread(target=_watch, args=(parent_pid,), name="die-with-parent",
                          daemon=True).start()
+
+
+@contextmanager
+def signals_held():
+    """Hold Ctrl-C and SIGTERM while the block forks a child; deliver them as it ends.
+
+    A signal that lands while CPython runs its at-fork handlers (logging's lock release, in
+    the parent, right after ``fork``) raises its exception inside that handler, where Python
+    prints "Exception ignored" and drops it: the command would go on as if never
+    interrupted. Held, the signal waits and is raised as the block ends, where it unwinds as
+    anywhere else. A child forked inside starts with both held; :func:`die_with_parent`
+    releases them (a child that does not call it leaves the block as the parent does).
+    A no-op outside the main thread or where the platform cannot hold signals."""
+    if not hasattr(signal, "pthread_sigmask") or \
+            threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, HELD)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, before)
+
+
+def _release(signums) -> None:
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, signums)
 
 
 def _kill_me_when_parent_dies() -> bool:
@@ -73,39 +106,98 @@ class Terminated(SystemExit):
     """SIGTERM received: unwinds the stack like an exception, exits with 128 + 15."""
 
 
-_terminated: list[int] = []          # the signal received inside exit_on_sigterm, if any
+_received: list[int] = []        # the signals received inside exit_on_sigterm, in order
 
 
 def raise_if_terminated() -> None:
-    """Raise :class:`Terminated` again if a SIGTERM came: the handler's exception can land in
-    a finaliser (``__del__``, a GC callback), where Python prints and drops it. Long loops
-    call this, and nothing is published after a SIGTERM."""
-    if _terminated:
-        raise Terminated(128 + _terminated[0])
+    """Raise the first signal received inside :func:`exit_on_sigterm` again:
+    :class:`Terminated` for a SIGTERM, ``KeyboardInterrupt`` for a Ctrl-C. Its handler's
+    exception can be lost: Python drops one that lands in a finaliser (``__del__``, a GC
+    callback) or an at-fork handler, and CasADi's IPOPT swallows a Ctrl-C. Long loops call
+    this, and nothing is published after either signal."""
+    if _received:
+        if _received[0] == signal.SIGINT:
+            raise KeyboardInterrupt
+        raise Terminated(128 + _received[0])
 
 
 @contextmanager
 def exit_on_sigterm():
-    """While inside, a SIGTERM raises :class:`Terminated` in the main thread, and leaving
-    the block normally after one raises it again (no-op when called from another thread,
-    where Python cannot install signal handlers)."""
+    """While inside, a SIGTERM raises :class:`Terminated` in the main thread and a Ctrl-C
+    the exception of the SIGINT handler in force (``KeyboardInterrupt``), each recorded;
+    leaving the block normally after one raises it again, as :func:`raise_if_terminated`
+    does. The exception of a recorded signal that Python drops is not printed: it comes
+    back. A no-op when called from another thread, where Python cannot install signal
+    handlers."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
 
     def handler(signum, frame):
         signal.signal(signal.SIGTERM, signal.SIG_DFL)     # a second SIGTERM ends at once
-        _terminated.append(signum)
+        _received.append(signum)
         print("optdesign: terminated", file=sys.stderr)
         raise Terminated(128 + signum)
 
-    _terminated.clear()
+    ctrl_c = signal.getsignal(signal.SIGINT)
+
+    def recorded(signum, frame):
+        _received.append(signum)
+        ctrl_c(signum, frame)
+
+    _received.clear()
     previous = signal.signal(signal.SIGTERM, handler)
+    if callable(ctrl_c):
+        signal.signal(signal.SIGINT, recorded)
+    unraisable = sys.unraisablehook
+    sys.unraisablehook = partial(_unless_received, unraisable)
     try:
         yield
     finally:
         signal.signal(signal.SIGTERM, previous)
+        if callable(ctrl_c):
+            signal.signal(signal.SIGINT, ctrl_c)
+        sys.unraisablehook = unraisable
     raise_if_terminated()
+
+
+def _unless_received(hook, unraisable) -> None:
+    """``hook``, but silent on the dropped exception of a signal that was recorded."""
+    if not (_received and unraisable.exc_type is not None
+            and issubclass(unraisable.exc_type, (KeyboardInterrupt, Terminated))):
+        hook(unraisable)
+
+
+@contextmanager
+def interrupts_kept():
+    """Around a call into CasADi's IPOPT, which swallows a Ctrl-C: one that lands inside is
+    raised again as the block ends.
+
+    CasADi checks for Ctrl-C during IPOPT and, finding one, ends the run as failed
+    ("NonIpopt_Exception_Thrown"), the KeyboardInterrupt consumed: the caller would go on
+    with one failed run. Inside the block, the SIGINT handler in force (a Python one: the
+    interpreter's, a notebook kernel's, :func:`exit_on_sigterm`'s) is wrapped so that a
+    call is recorded; as the block ends, the handler is called again where its exception can
+    propagate. Nothing changes where SIGINT is ignored (a worker) or outside the main
+    thread."""
+    previous = signal.getsignal(signal.SIGINT) \
+        if threading.current_thread() is threading.main_thread() else None
+    if not callable(previous):
+        yield
+        return
+    came: list[int] = []
+
+    def recorded(signum, frame):
+        came.append(signum)
+        previous(signum, frame)
+
+    signal.signal(signal.SIGINT, recorded)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if came:
+        previous(signal.SIGINT, None)
 
 
 def beside(fn, *args):
@@ -120,7 +212,8 @@ def beside(fn, *args):
         ctx = mp.get_context("fork")
         receive, send = ctx.Pipe(duplex=False)
         child = ctx.Process(target=_answer, args=(send, os.getpid(), fn, args))
-        child.start()
+        with signals_held():
+            child.start()
     except (ValueError, OSError, AssertionError):  # no fork here, or a daemon's child
         return lambda: fn(*args)
     send.close()

@@ -1,5 +1,6 @@
 """A computation beside this process (optdesign.lifetime.beside): its value, its error, and a
-child lost without a word."""
+child lost without a word; and no Ctrl-C lost, whether it lands as a child is forked, in a
+finaliser or inside CasADi's IPOPT."""
 import os
 import signal
 
@@ -34,3 +35,73 @@ def test_the_childs_error_is_raised_here():
 
 def test_a_lost_child_is_computed_here():
     assert beside(_dies_in_a_child, os.getpid())() == "computed here"
+
+
+# --------------------------------------------------------------------------- no Ctrl-C lost
+def _ctrl_c_now():
+    """Send this process a SIGINT and give its handler the chance to run."""
+    os.kill(os.getpid(), signal.SIGINT)
+    for _ in range(100):                    # the handler runs between two bytecodes
+        pass
+
+
+def test_a_ctrl_c_while_signals_are_held_is_raised_as_the_block_ends():
+    from optdesign.lifetime import signals_held
+
+    reached = []
+    with pytest.raises(KeyboardInterrupt):
+        with signals_held():
+            _ctrl_c_now()
+            reached.append("the end of the block")
+    assert reached == ["the end of the block"]
+
+
+def test_a_child_forked_with_signals_held_gets_them_back():
+    """beside forks with them held; the child (die_with_parent) releases them: a child that
+    kept SIGTERM blocked could not be ended by its parent."""
+    blocked = beside(signal.pthread_sigmask, signal.SIG_BLOCK, [])()
+    assert signal.SIGTERM not in blocked and signal.SIGINT not in blocked
+
+
+def test_casadi_swallows_a_ctrl_c_during_ipopt_and_interrupts_kept_raises_it_again():
+    import threading
+
+    import casadi as ca
+
+    from optdesign.lifetime import interrupts_kept
+
+    x = ca.MX.sym("x", 300)
+    solver = ca.nlpsol("s", "ipopt", {"x": x, "f": ca.sumsqr(ca.sin(x) - ca.cos(ca.cumsum(x)))},
+                       {"ipopt.print_level": 0, "print_time": 0, "ipopt.max_iter": 100000,
+                        "ipopt.tol": 1e-300, "ipopt.acceptable_iter": 0})
+
+    def interrupted_run():
+        timer = threading.Timer(0.2, os.kill, (os.getpid(), signal.SIGINT))
+        timer.start()
+        try:
+            solver(x0=1.0)
+        finally:
+            timer.join()
+        return solver.stats()["return_status"]
+
+    assert interrupted_run() == "NonIpopt_Exception_Thrown"     # the Ctrl-C is gone
+    with pytest.raises(KeyboardInterrupt):
+        with interrupts_kept():
+            interrupted_run()
+
+
+def test_a_ctrl_c_dropped_in_a_finaliser_comes_back_unprinted(capsys):
+    from optdesign.lifetime import exit_on_sigterm, raise_if_terminated
+
+    class Finalised:
+        def __del__(self):
+            _ctrl_c_now()                   # its KeyboardInterrupt is dropped by Python
+
+    reached = []
+    with pytest.raises(KeyboardInterrupt):
+        with exit_on_sigterm():
+            Finalised()                     # made and dropped: the finaliser runs here
+            reached.append("past the finaliser")
+            raise_if_terminated()
+    assert reached == ["past the finaliser"]
+    assert "Exception ignored" not in capsys.readouterr().err

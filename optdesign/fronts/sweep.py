@@ -33,7 +33,7 @@ from optdesign.fronts.files import write_front
 from optdesign.fronts.front import ParetoResult, evaluate, frame
 from optdesign.fronts.section import DEFAULT_POINTS, ParetoSection
 from optdesign.fronts.store import Journal
-from optdesign.lifetime import die_with_parent, raise_if_terminated
+from optdesign.lifetime import die_with_parent, raise_if_terminated, signals_held
 from optdesign.quantities.criteria import result_columns
 from optdesign.solver import verify
 
@@ -96,7 +96,8 @@ class _Pool:
                                         initializer=die_with_parent, initargs=(os.getpid(),))
 
     def submit(self, fn, *args):
-        return self.pool.submit(fn, *args)
+        with signals_held():             # the first job forks the workers
+            return self.pool.submit(fn, *args)
 
     def wait_any(self, futures):
         return _wait(futures, return_when=FIRST_COMPLETED).done

@@ -32,7 +32,7 @@ import traceback
 from typing import Any, Callable, Sequence
 
 from optdesign.errors import OptDesignError
-from optdesign.lifetime import die_with_parent
+from optdesign.lifetime import die_with_parent, signals_held
 
 #: one figure: a module-level function (a forked process finds it by name), its arguments
 Job = tuple  # (Callable, tuple, dict)
@@ -119,15 +119,16 @@ class FigureProcess:
                 stream.flush()
             except (OSError, ValueError, AttributeError):
                 pass
-        pid = os.fork()
-        if pid == 0:                                # the figures' process: never returns
-            try:
-                os.close(jobs_w)
-                os.close(results_r)
-                die_with_parent(parent)
-                _serve(jobs_r, results_w, warm)
-            finally:
-                os._exit(0)
+        with signals_held():                        # a Ctrl-C now is not lost
+            pid = os.fork()
+            if pid == 0:                            # the figures' process: never returns
+                try:
+                    os.close(jobs_w)
+                    os.close(results_r)
+                    die_with_parent(parent)         # Ctrl-C ignored, the signals released
+                    _serve(jobs_r, results_w, warm)
+                finally:
+                    os._exit(0)
         os.close(jobs_r)
         os.close(results_w)
         self._pid, self._jobs_w, self._results_r = pid, jobs_w, results_r

@@ -22,7 +22,7 @@ from optdesign.envelope.sampled import STROKE_SIGNS
 from optdesign.errors import AssemblyError, ProblemError
 from optdesign.evaluation.regulation import quantities_over_range
 from optdesign.evaluation.sensitivity import sensitivity_record
-from optdesign.lifetime import die_with_parent
+from optdesign.lifetime import die_with_parent, interrupts_kept, signals_held
 from optdesign.quantities import design_quantities, get_quantity
 from optdesign.quantities.criteria import (LengthConstraint, bound_excess, constraints_of,
                                            interval_quantities, objective_of,
@@ -297,7 +297,7 @@ class PhaseSolver:
             solver = nlp.solver(hessian)
         nlp.watch.start([np.array([v[k] for k in nlp.free]) / nlp.scale for v in self.avoid],
                         lbg, ubg, None if budget is None else max(budget, 1))
-        with self.timings.stage("ipopt"):
+        with self.timings.stage("ipopt"), interrupts_kept():   # CasADi swallows Ctrl-C
             sol = solver(x0=nlp.start(guess, lbx, ubx, params), lbx=lbx, ubx=ubx, lbg=lbg,
                          ubg=ubg, p=params)
         stats = solver.stats()
@@ -431,8 +431,10 @@ def _in_parallel(problem, count: int, starts: list[dict]) -> list[tuple[Outcome,
     pool = ProcessPoolExecutor(len(starts), mp_context=mp.get_context("fork"),
                                initializer=die_with_parent, initargs=(os.getpid(),))
     try:
-        return list(pool.map(_polish_alone, [(problem, count, v, i > 0)
-                                             for i, v in enumerate(starts)]))
+        with signals_held():             # the workers are forked as the jobs are handed out
+            outcomes = pool.map(_polish_alone, [(problem, count, v, i > 0)
+                                                for i, v in enumerate(starts)])
+        return list(outcomes)
     except BaseException:       # Ctrl-C (the workers ignore it) or an error: end them now
         for proc in list((getattr(pool, "_processes", None) or {}).values()):
             proc.terminate()

@@ -47,7 +47,6 @@ def die_with_parent(parent_pid: int | None = None) -> None:
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     except ValueError:                         # not the main thread: nothing inherited there
         pass
-    _release(HELD)                             # forked with them held: see signals_held
     by_kernel = _kill_me_when_parent_dies()
     if os.getppid() != parent_pid:             # the parent died before the guard was set
         os._exit(1)
@@ -63,24 +62,49 @@ def signals_held():
     A signal that lands while CPython runs its at-fork handlers (logging's lock release, in
     the parent, right after ``fork``) raises its exception inside that handler, where Python
     prints "Exception ignored" and drops it: the command would go on as if never
-    interrupted. Held, the signal waits and is raised as the block ends, where it unwinds as
-    anywhere else. A child forked inside starts with both held; :func:`die_with_parent`
-    releases them (a child that does not call it leaves the block as the parent does).
-    A no-op outside the main thread or where the platform cannot hold signals."""
-    if not hasattr(signal, "pthread_sigmask") or \
-            threading.current_thread() is not threading.main_thread():
+    interrupted. Inside the block their Python handlers only record them (whichever thread
+    the kernel hands a signal to, its Python handler runs in the main thread); as the block
+    ends, the handler of the first one recorded is called, where its exception unwinds as
+    anywhere else. A child forked inside records them too until it sets its own
+    (:func:`die_with_parent`). A no-op outside the main thread."""
+    with _handlers_wrapped(HELD, through=False):
+        yield
+
+
+@contextmanager
+def _handlers_wrapped(signums, through: bool):
+    """Inside, each Python handler of ``signums`` is replaced by one that records the call
+    and (``through``) passes it on; as the block ends, the handlers are put back and a
+    recorded signal is handed to its handler again (with ``through``, only when the block
+    ended without an exception: the handler's own, raised through, is on its way)."""
+    if threading.current_thread() is not threading.main_thread():
         yield
         return
-    before = signal.pthread_sigmask(signal.SIG_BLOCK, HELD)
+    handlers = {s: h for s in signums if callable(h := signal.getsignal(s))}
+    came: list[int] = []
+
+    def record(signum, frame):
+        came.append(signum)
+        if through:
+            handlers[signum](signum, frame)
+
+    for signum in handlers:
+        signal.signal(signum, record)
     try:
         yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, before)
+    except BaseException:
+        _put_back(handlers)
+        if came and not through:
+            handlers[came[0]](came[0], None)
+        raise
+    _put_back(handlers)
+    if came:
+        handlers[came[0]](came[0], None)
 
 
-def _release(signums) -> None:
-    if hasattr(signal, "pthread_sigmask"):
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, signums)
+def _put_back(handlers: dict) -> None:
+    for signum, handler in handlers.items():
+        signal.signal(signum, handler)
 
 
 def _kill_me_when_parent_dies() -> bool:
@@ -115,10 +139,14 @@ def raise_if_terminated() -> None:
     exception can be lost: Python drops one that lands in a finaliser (``__del__``, a GC
     callback) or an at-fork handler, and CasADi's IPOPT swallows a Ctrl-C. Long loops call
     this, and nothing is published after either signal."""
-    if _received:
-        if _received[0] == signal.SIGINT:
+    _raise_first(_received)
+
+
+def _raise_first(signums: list[int]) -> None:
+    if signums:
+        if signums[0] == signal.SIGINT:
             raise KeyboardInterrupt
-        raise Terminated(128 + _received[0])
+        raise Terminated(128 + signums[0])
 
 
 @contextmanager
@@ -158,7 +186,9 @@ def exit_on_sigterm():
         if callable(ctrl_c):
             signal.signal(signal.SIGINT, ctrl_c)
         sys.unraisablehook = unraisable
-    raise_if_terminated()
+        received = _received[:]
+        _received.clear()                   # nothing left for a later block of the process
+    _raise_first(received)
 
 
 def _unless_received(hook, unraisable) -> None:
@@ -176,28 +206,12 @@ def interrupts_kept():
     CasADi checks for Ctrl-C during IPOPT and, finding one, ends the run as failed
     ("NonIpopt_Exception_Thrown"), the KeyboardInterrupt consumed: the caller would go on
     with one failed run. Inside the block, the SIGINT handler in force (a Python one: the
-    interpreter's, a notebook kernel's, :func:`exit_on_sigterm`'s) is wrapped so that a
-    call is recorded; as the block ends, the handler is called again where its exception can
-    propagate. Nothing changes where SIGINT is ignored (a worker) or outside the main
-    thread."""
-    previous = signal.getsignal(signal.SIGINT) \
-        if threading.current_thread() is threading.main_thread() else None
-    if not callable(previous):
+    interpreter's, a notebook kernel's, :func:`exit_on_sigterm`'s) still runs, so IPOPT
+    stops at once, and a call is recorded; as the block ends, the handler is called again
+    where its exception can propagate. Nothing changes where SIGINT is ignored (a worker)
+    or outside the main thread."""
+    with _handlers_wrapped((signal.SIGINT,), through=True):
         yield
-        return
-    came: list[int] = []
-
-    def recorded(signum, frame):
-        came.append(signum)
-        previous(signum, frame)
-
-    signal.signal(signal.SIGINT, recorded)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
-    if came:
-        previous(signal.SIGINT, None)
 
 
 def beside(fn, *args):

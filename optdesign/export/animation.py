@@ -278,19 +278,39 @@ def _gif(fig, draw_frame, count: int, path, fps: int) -> None:
 
 
 def _palette_frames(fig, draw_frame, indices, fps: int) -> list:
-    """The frames ``indices`` as matplotlib's PillowWriter renders them, each reduced to the
-    adaptive palette Pillow's GIF writer gives an opaque RGBA frame: the images it writes."""
-    from matplotlib.animation import FuncAnimation, PillowWriter
+    """The frames ``indices`` as matplotlib's PillowWriter grabs them (the figure saved as
+    RGBA at the writer's dpi; an opaque one as RGB), each opaque one reduced to the adaptive
+    palette Pillow's GIF writer gives it: the images that writer writes."""
+    import io
+
+    from matplotlib.animation import AbstractMovieWriter, FuncAnimation
     from PIL import Image
 
-    class Kept(PillowWriter):
-        def finish(self):                       # the frames stay, no file is written
+    class Kept(AbstractMovieWriter):
+        """A movie writer that keeps its frames (GIF-ready) and writes no file."""
+
+        def setup(self, fig, outfile, dpi=None):
+            super().setup(fig, outfile, dpi=dpi)
+            self.frames = []
+
+        def grab_frame(self, **savefig_kwargs):
+            buf = io.BytesIO()
+            self.fig.savefig(buf, **{**savefig_kwargs, "format": "rgba", "dpi": self.dpi})
+            rgba = Image.frombuffer("RGBA", self.frame_size, buf.getbuffer(), "raw", "RGBA",
+                                    0, 1)
+            if rgba.getextrema()[3][0] < 255:   # see-through: Pillow's GIF writer reduces it
+                self.frames.append(rgba)
+            else:                               # opaque: as RGB, reduced as that writer does
+                self.frames.append(rgba.convert("RGB").convert("P",
+                                                               palette=Image.Palette.ADAPTIVE))
+
+        def finish(self):
             pass
 
     kept = Kept(fps=fps)
     FuncAnimation(fig, draw_frame, frames=list(indices), blit=False).save(
         "frames.gif", writer=kept)
-    return [im.convert("P", palette=Image.Palette.ADAPTIVE) for im in kept._frames]
+    return kept.frames
 
 
 def _width(role: str) -> float:

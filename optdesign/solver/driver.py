@@ -434,13 +434,14 @@ def _in_parallel(problem, count: int, starts: list[dict]) -> list[tuple[Outcome,
         with signals_held():             # the workers are forked as the jobs are handed out
             outcomes = pool.map(_polish_alone, [(problem, count, v, i > 0)
                                                 for i, v in enumerate(starts)])
-        return list(outcomes)
-    except BaseException:       # Ctrl-C (the workers ignore it) or an error: end them now
+        outcomes = list(outcomes)
+    except BaseException:       # Ctrl-C (the workers ignore it) or an error: end them now,
         for proc in list((getattr(pool, "_processes", None) or {}).values()):
-            proc.terminate()
+            proc.terminate()    # and wait for nothing: one ended as it sent its outcome
+        pool.shutdown(wait=False, cancel_futures=True)  # leaves the pool's reader waiting
         raise
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+    pool.shutdown(wait=True)
+    return outcomes
 
 
 def _polish_alone(job) -> tuple[Outcome, Timings]:

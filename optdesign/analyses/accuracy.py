@@ -30,6 +30,7 @@ from optdesign.envelope.sampled import (StrokeFigures, driving_speeds, output_en
                                         sampled_figures)
 from optdesign.evaluation.design import Design
 from optdesign.figures.design import place_labels, pyplot
+from optdesign.lifetime import interrupts_kept
 from optdesign.quantities.criteria import objective_of
 from optdesign.solver import solve, verify
 from optdesign.solver.driver import PhaseSolver
@@ -173,7 +174,8 @@ def surrogate_figures(problem, values, samples: int, smoothing: float):
     lbg, ubg = nlp.constraint_bounds(fixed, ver.sequences)
     ipopt = nlp.solver(fixed.solver.hessian)
     t0 = time.perf_counter()
-    sol = ipopt(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=params)
+    with interrupts_kept():                 # CasADi swallows a Ctrl-C during IPOPT
+        sol = ipopt(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=params)
     t_solve = time.perf_counter() - t0
     status = ipopt.stats()["return_status"]
     x = np.array(sol["x"]).ravel()

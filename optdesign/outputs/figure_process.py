@@ -125,7 +125,7 @@ class FigureProcess:
                 try:
                     os.close(jobs_w)
                     os.close(results_r)
-                    die_with_parent(parent)         # Ctrl-C ignored, the signals released
+                    die_with_parent(parent)         # its own handlers: Ctrl-C ignored
                     _serve(jobs_r, results_w, warm)
                 finally:
                     os._exit(0)

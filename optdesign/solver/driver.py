@@ -432,9 +432,9 @@ def _in_parallel(problem, count: int, starts: list[dict]) -> list[tuple[Outcome,
                                initializer=die_with_parent, initargs=(os.getpid(),))
     try:
         with signals_held():             # the workers are forked as the jobs are handed out
-            outcomes = pool.map(_polish_alone, [(problem, count, v, i > 0)
-                                                for i, v in enumerate(starts)])
-        outcomes = list(outcomes)
+            pending = pool.map(_polish_alone, [(problem, count, v, i > 0)
+                                               for i, v in enumerate(starts)])
+        outcomes = list(pending)
     except BaseException:       # Ctrl-C (the workers ignore it) or an error: end them now,
         for proc in list((getattr(pool, "_processes", None) or {}).values()):
             proc.terminate()    # and wait for nothing: one ended as it sent its outcome

@@ -143,12 +143,14 @@ class FourBarConverter(Mechanism):
                                 lower=own["min_pin_radius"], column="pin_radius",
                                 meaning="|AC_i|: l2 - l2_prime, or l2_prime under pin_layout: "
                                         "text",
-                                at_zero="a pin radius of 0 puts every rod on the crank pin")]
+                                at_zero="a pin radius of 0 puts every rod on the crank pin",
+                                file_key="constraints.min_pin_radius")]
         if own["grashof"]:
             for k in ("l0", "l2", "l3"):
                 out.append(LengthConstraint(
                     f"grashof[{k}]",
-                    lambda p, k=k: p["l0"] + p["l2"] + p["l3"] - 2 * p[k] - p["l1"]))
+                    lambda p, k=k: p["l0"] + p["l2"] + p["l3"] - 2 * p[k] - p["l1"],
+                    file_key="constraints.grashof"))
         return out
 
     def check_values(self, values, count):

@@ -94,7 +94,8 @@ class PulseReducer(Mechanism):
         """The crank pin stays inside the pivot circle, r = r1/a < 1 (eqs. 1-2):
         1 - r1/a >= assembly_margin (dimensionless, O(1) for the NLP)."""
         return [LengthConstraint("crank_inside_pivots", lambda p: 1 - p["r1"] / p["a"],
-                                 lower=constraints.assembly_margin, unit="-")]
+                                 lower=constraints.assembly_margin, unit="-",
+                                 file_key="design.r1 (below design.a)")]
 
     def check_values(self, values, count):
         if values["r1"] >= values["a"]:

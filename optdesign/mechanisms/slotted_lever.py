@@ -85,7 +85,8 @@ class SlottedLever(Mechanism):
         """Link 7 oscillates only while its pivot D lies beyond A's circle, XD > L:
         1 - L/XD >= assembly_margin (dimensionless, O(1) for the NLP)."""
         return [LengthConstraint("pivot_outside_circle", lambda p: 1 - p["L"] / p["XD"],
-                                 lower=constraints.assembly_margin, unit="-")]
+                                 lower=constraints.assembly_margin, unit="-",
+                                 file_key="design.L (below design.XD)")]
 
     def check_values(self, values, count):
         if values["XD"] <= values["L"]:

@@ -102,6 +102,9 @@ class Constraints:
     #: bounds on quantities (``constraints: {QUANTITY: {lower, upper, at}}``) other than the
     #: three that stand for older keys (optdesign.quantities.bounds)
     quantities: tuple = ()
+    #: the file's own key of a bound read into an older one (``{"min_ratio":
+    #: "constraints.ratio.lower"}``), so that messages name what the user wrote
+    spelled: Mapping[str, str] = field(default_factory=dict, compare=False)
 
     def __getattr__(self, name: str):
         """A mechanism's own key reads as an attribute too (``constraints.min_pin_radius``)."""
@@ -712,12 +715,18 @@ def _read_constraints(r, raw, mech, eccentricities) -> Constraints:
     return Constraints(**kw)
 
 
+#: the criterion (optdesign.quantities.criteria) each older key is held by
+_CRITERION_OF_ALIAS = {"min_ratio": "min_ratio", "max_ripple": "max_ripple",
+                       "min_transmission_angle_deg": "transmission_angle"}
+
+
 def _quantity_aliases(r, top, constraints: Constraints, objective: Objective):
     """The bounds that stand for older keys, moved there (optdesign.quantities.bounds:
     ``ratio.lower``, ``transmission_angle.lower``, and ``ripple.upper`` under minimize:
     -ratio); giving both names of one bound is an error."""
     given = {"objective": top.get("objective") or {}, "constraints": top.get("constraints") or {}}
     kept, moved = [], {"objective": {}, "constraints": {}}
+    spelled = {}
     for spec in constraints.quantities:
         rest = spec
         for side in ("lower", "upper"):
@@ -732,10 +741,12 @@ def _quantity_aliases(r, top, constraints: Constraints, objective: Objective):
                 raise r.error(f"constraints.{spec.name}.{side}",
                               f"and {section}.{key} name the same bound: give one")
             moved[section][key] = value
+            spelled[_CRITERION_OF_ALIAS[key]] = f"constraints.{spec.name}.{side}"
             rest = replace(rest, **{side: math.inf if side == "upper" else -math.inf})
         if math.isfinite(rest.lower) or math.isfinite(rest.upper):
             kept.append(rest)
-    constraints = replace(constraints, quantities=tuple(kept), **moved["constraints"])
+    constraints = replace(constraints, quantities=tuple(kept), spelled=spelled,
+                          **moved["constraints"])
     return constraints, replace(objective, **moved["objective"])
 
 

@@ -68,6 +68,13 @@ class Quantity:
         """``upper`` for a quantity whose larger values are worse, else ``lower``."""
         return "upper" if self.worst == "max" else "lower"
 
+    def nlp_needs(self, lower: float, upper: float) -> frozenset[str]:
+        """What the NLP must hold exactly for a bound ``lower <= value <= upper`` on this
+        quantity to be safe: its NLP form is conservative in one direction, and a bound on the
+        other side asks for more (the ratio's mean needs exact hand-overs under a cap).
+        Empty by default: the form is exact, or conservative on the bound's side."""
+        return frozenset()
+
     def __repr__(self) -> str:
         return f"<quantity {self.name} [{self.unit}]>"
 

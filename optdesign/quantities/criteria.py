@@ -123,6 +123,11 @@ class Constraint:
     def tolerance(self, m: Measured) -> float:
         return TOL_RATIO
 
+    def key(self, problem) -> str:
+        """The problem file's key of this constraint, as the user wrote it (messages name
+        it, never an NLP row)."""
+        return f"constraints.{self.name}"
+
     def bound_per_unit(self, problem, lower: bool) -> tuple[float, str]:
         """How the NLP row's bound moves per unit of the designer's bound, and that unit:
         IPOPT's multiplier of a row times this is d objective / d (the file's value)."""
@@ -157,6 +162,10 @@ class TransmissionAngle(Constraint):
     def violation(self, problem, m):
         return problem.constraints.min_transmission_angle_deg - m.min_angle_deg
 
+    def key(self, problem):
+        return problem.constraints.spelled.get(self.name,
+                                               "constraints.min_transmission_angle_deg")
+
     def bound_per_unit(self, problem, lower):
         """The row's bound is cos²μ_min: d cos²μ_min / dμ_min = -sin 2μ_min per radian."""
         mu = math.radians(problem.constraints.min_transmission_angle_deg)
@@ -177,6 +186,9 @@ class RatioFloor(Constraint):
     def bounds(self, problem, tightening_deg=0.0):
         return problem.objective.min_ratio, math.inf
 
+    def key(self, problem):
+        return problem.constraints.spelled.get(self.name, "objective.min_ratio")
+
 
 class RippleCap(Constraint):
     """worst δ <= max_ripple, with the largest-ratio objective."""
@@ -189,6 +201,9 @@ class RippleCap(Constraint):
     def bounds(self, problem, tightening_deg=0.0):
         return -math.inf, problem.objective.max_ripple
 
+    def key(self, problem):
+        return problem.constraints.spelled.get(self.name, "objective.max_ripple")
+
 
 class LengthConstraint(Constraint):
     """A constraint on the lengths alone, with one formula for symbols and numbers:
@@ -196,8 +211,10 @@ class LengthConstraint(Constraint):
 
     def __init__(self, name: str, formula, lower: float = 0.0, upper: float = math.inf,
                  column: str | None = None, unit: str = "mm", at_zero: str = "",
-                 meaning: str = ""):
+                 meaning: str = "", file_key: str | None = None):
         self.name, self.formula, self.lower, self.upper = name, formula, lower, upper
+        #: the problem file's key that sets the bound (default ``constraints.NAME``)
+        self.file_key = file_key
         self.column = column            # the result tables' column of this value, if any
         self.unit = unit                # of the formula's value: mm, or "-" for a ratio
         self.meaning = meaning          # what the value is, in the mechanism's words
@@ -213,6 +230,9 @@ class LengthConstraint(Constraint):
 
     def tolerance(self, m):
         return TOL_LENGTH_REL * max(abs(v) for v in m.lengths.values())
+
+    def key(self, problem):
+        return self.file_key or super().key(problem)
 
 
 def result_columns(problem) -> dict[str, str]:
@@ -259,21 +279,30 @@ class QuantityConstraint(Constraint):
         """Relative to the value: the NLP holds the bound to IPOPT's tolerance."""
         return quantity_tolerance(self.value(m))
 
+    def key(self, problem):
+        """``constraints.ratio.upper``: the side where one is given alone."""
+        sides = [side for side in ("lower", "upper")
+                 if math.isfinite(getattr(self.spec, side))]
+        return f"constraints.{self.spec.name}" + (f".{sides[0]}" if len(sides) == 1 else "")
+
 
 class SectionConstraint(Constraint):
     """A constraint a problem-file section contributes (e.g. the driveline's speed limit):
     the section gives the symbolic rows from the peak output speed and checks the design."""
 
     def __init__(self, key: str, section, problem):
-        self.key, self.section, self.problem = key, section, problem
+        self.key_name, self.section, self.problem = key, section, problem
         self.name = key
 
     def rows(self, q):
-        return [(f"{self.key}.{name}", g) for name, g in
+        return [(f"{self.key_name}.{name}", g) for name, g in
                 self.section.solve_constraints(self.problem, q.peak_speed)]
 
     def bounds(self, problem, tightening_deg=0.0):
         return 0.0, math.inf
+
+    def key(self, problem):
+        return self.key_name
 
     def violation(self, problem, m):
         return math.inf if self.section.verify(problem, m.evaluation) else -math.inf

@@ -339,6 +339,8 @@ class _Polishing:
         self.workers = workers
         self.best: Outcome | None = None
         self.optima: list[Outcome] = []
+        #: every polish's outcome, feasible or not (the verdict must agree with each)
+        self.outcomes: list[Outcome] = []
         self.polished = 0
         self.improved_at = 0          # the polish that last improved on the best
 
@@ -350,8 +352,17 @@ class _Polishing:
             self.solver.avoid = []
         return self.record(outcome)
 
+    def consider(self, outcome: Outcome) -> None:
+        """A known design verified as it is (no polish): the best when it meets every
+        constraint and beats the polished optima; never a basin a polish stops at."""
+        if outcome.record.feasible and (self.best is None or
+                                        outcome.verification.key < self.best.verification.key):
+            self.result.starts.append(outcome.record)
+            self.best = outcome
+
     def record(self, outcome: Outcome) -> Outcome:
         self.polished += 1
+        self.outcomes.append(outcome)
         self.result.starts.append(outcome.record)
         self.result.iterations += outcome.record.iterations
         if outcome.record.feasible:
@@ -468,8 +479,15 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
     ``workers`` processes at once; default :func:`workers_for`; 1 with a given ``solver``,
     whose built NLPs are kept for re-use). ``neighbours``: optima of other phase counts,
     screened with the box (continuation: the optimum of n - 1 often lies in the best basin
-    of n, and ranks first when it does). ``explain``: when no start meets the problem, tell
-    how far its binding constraint is out of reach (:func:`_explain`)."""
+    of n, and ranks first when it does).
+
+    The verdict is a claim with its evidence. The design the file gives (its fixed and
+    initial values) is a candidate as it is, so the answer is never worse than it. With
+    ``explain``, a count no polish meets is ``infeasible`` only where a verified relaxed solve
+    shows the binding bound out of reach (:mod:`optdesign.solver.reachable`); where the
+    relaxed optimum meets the bound, the polish goes on from it. When no screened design
+    passes the filters, that relaxed solve comes first: an out-of-reach bound is told at the
+    cost of one solve, not of every start failing first."""
     if not problem.free_lengths():
         fixed = _fixed_infeasible(problem, count)
         if fixed is not None:
@@ -488,8 +506,30 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
                            extra=list(neighbours))
     result = PhaseResult(count, "failed", screening=screening.to_dict())
     work = _Polishing(basins.problem, count, basins, result, workers)
-    work.basins(screening.seeds)
+    given = problem.start_values() | {problem.model.count_variable: count}
+    relax = explain and not robust and bool(screening.seeds)
+    reach = None
+    if relax and screening.n_feasible == 0:
+        reach = _reach(problem, count, None, workers, [given], basins.timings)
+        if reach is not None and reach.out_of_reach:
+            result.timings = solver.timings.to_dict()
+            return _infeasible(result, problem, count, reach)
+    seeds = list(screening.seeds)
+    if reach is not None and reach.design is not None:
+        seeds.insert(0, _seed(problem, reach.design))   # meets every bound: polish it first
+    work.basins(seeds)
     work.lines()
+    if not robust:
+        work.consider(basins.as_it_is(given))
+    if work.best is None and relax and reach is None:
+        reach = _reach(problem, count, _binding_of(result), workers,
+                       [given] + [o.values for o in work.outcomes], basins.timings)
+        if reach is not None and reach.out_of_reach:
+            result.timings = solver.timings.to_dict()
+            return _infeasible(result, problem, count, reach)
+        if reach is not None and reach.design is not None:
+            work.consider(basins.as_it_is(reach.design))
+            work.polish(reach.design)
     result.screening |= {"polished": work.polished, "distinct_optima": len(work.optima)}
     if robust:
         solver.checks_in_parallel = workers > 1
@@ -502,9 +542,40 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
         result.message = (f"no design within the bounds assembles at every listed "
                           f"eccentricity with {count} phases")
         return result
-    result = _no_optimum(result)
-    if explain:
-        _explain(problem, count, result)
+    result = _no_optimum(result, problem)
+    if reach is not None:
+        result.reachable = reach.to_dict()
+    return result
+
+
+def _reach(problem, count: int, binding, workers: int, known, timings: Timings):
+    """:func:`~optdesign.solver.reachable.reach_of` the count, its time the screening's."""
+    with timings.stage("screening"):
+        return reach_of(problem, count, binding, solve_phase, workers, known)
+
+
+def _binding_of(result: PhaseResult) -> str | None:
+    """The constraint the failed polishes most often ended on (IPOPT's word first)."""
+    verdicts = [r.note for r in result.starts
+                if r.note and r.ipopt_status == "Infeasible_Problem_Detected"]
+    notes = verdicts or [r.note for r in result.starts if r.note]
+    return max(set(notes), key=notes.count) if notes else None
+
+
+def _seed(problem, values: dict):
+    """A design to polish first, as a screening's seed."""
+    from optdesign.solver.screening import Candidate
+
+    free = problem.free_lengths()
+    return Candidate({k: float(values[k]) for k in values}, -np.inf, True,
+                     np.zeros(len(free)))
+
+
+def _infeasible(result: PhaseResult, problem, count: int, reach) -> PhaseResult:
+    """The count is out of reach of ``reach``'s bound: its verified nearest value."""
+    result.status, result.binding = "infeasible", reach.constraint
+    result.reachable = reach.to_dict()
+    result.message = reach.text(problem.model.count_variable, count)
     return result
 
 
@@ -534,24 +605,6 @@ def _from_nominal_optima(problem, count: int, solver: PhaseSolver, nominal: "_Po
     return work
 
 
-def _explain(problem, count: int, result: PhaseResult) -> None:
-    """No start met the problem: how far its binding constraint is out of reach
-    (:mod:`optdesign.solver.reachable`); beyond the bound the count is ``infeasible`` by that
-    much, within it the message says that more starts may find a design."""
-    reach = reach_of(problem, count, result.binding, solve_phase)
-    if reach is None:
-        return
-    result.reachable = reach.to_dict()
-    if reach.out_of_reach:
-        result.status = "infeasible"
-        result.message = reach.text(problem.model.count_variable, count)
-    else:
-        unit = "" if reach.unit in ("", "-") else f" {reach.unit}"
-        result.message += (f"; a design in the bounds reaches {reach.constraint} "
-                           f"{reach.value:.6g}{unit}: more starts (solver.starts, "
-                           f"solver.screen) may find one that meets every constraint")
-
-
 def _in_objective_units(problem, active: list[dict], ver: Verification) -> list[dict]:
     """The active set's sensitivities in the objective's units (the NLP may minimise another
     figure of it: cos²μ for the largest least angle)."""
@@ -577,18 +630,33 @@ def tightened(problem, bound):
     return replace(problem, constraints=replace(problem.constraints, quantities=tuple(specs)))
 
 
-def _no_optimum(result: PhaseResult) -> PhaseResult:
-    """Infeasible only on IPOPT's word; polishes that ran out of iterations prove nothing."""
-    verdicts = [r.note for r in result.starts
-                if r.note and r.ipopt_status == "Infeasible_Problem_Detected"]
-    notes = verdicts or [r.note for r in result.starts if r.note]
-    statuses = {r.ipopt_status for r in result.starts}
-    result.status = "infeasible" if "Infeasible_Problem_Detected" in statuses else "failed"
-    result.binding = max(set(notes), key=notes.count) if notes else None
-    result.message = (f"no start reached a verified feasible optimum (IPOPT: "
-                      f"{', '.join(sorted(statuses))})"
-                      + (f"; binding: {result.binding}" if result.binding else ""))
+def _no_optimum(result: PhaseResult, problem) -> PhaseResult:
+    """No polish reached a verified feasible design and no relaxed solve showed a bound out
+    of reach: ``failed``, naming where the polishes ended in the file's words."""
+    result.status = "failed"
+    statuses = sorted({r.ipopt_status for r in result.starts})
+    result.binding = _binding_of(result)
+    where = _in_user_words(problem, result.binding)
+    result.message = (f"no polish reached a design that meets every constraint (IPOPT: "
+                      f"{', '.join(statuses) or 'not run'})"
+                      + (f"; the polishes ended short of {where}" if where else ""))
     return result
+
+
+def _in_user_words(problem, row: str | None) -> str:
+    """The problem file's key behind an NLP row or a criterion name (``min_ratio[e1]`` ->
+    ``objective.min_ratio``); the output-speed envelope's own rows in words."""
+    if not row:
+        return ""
+    name = row.split("[", 1)[0]
+    for criterion in constraints_of(problem):
+        if name in (criterion.name, criterion.name.split("[", 1)[0]):
+            return criterion.key(problem)
+    for spec in quantity_specs(problem):
+        if name.endswith(f"_{spec.name}") or name.endswith(f"_{spec.key}"):
+            return next((c.key(problem) for c in constraints_of(problem)
+                         if c.name == spec.key), f"the {spec.name} objective")
+    return "the output-speed envelope's tracked extremes (a linkage near a dead point)"
 
 
 def next_held(problem, ver: Verification) -> Held:

@@ -340,6 +340,10 @@ class PhaseNLP:
         self.specs = quantity_specs(problem)
         self.turn = sorted({s.name for s in self.specs
                             if isinstance(get_quantity(s.name), TurnQuantity)})
+        #: what the bounds need held exactly beyond the conservative forms (a cap on the
+        #: ratio: the hand-over angles at the curves' crossings)
+        self.needs = frozenset().union(*(get_quantity(s.name).nlp_needs(s.lower, s.upper)
+                                         for s in self.specs))
         self._quantity_rows: dict = {}
         self.layout = Layout()
         self._solvers: dict[str, ca.Function] = {}
@@ -559,6 +563,11 @@ class PhaseNLP:
         f_x, th = self._stack(dth_x / e), self._stack(th_x)
         b.row(f"trough_handovers[{tag}]", ca.vertcat(ca.sum1(before * f_x).T - w_lo,
                                                      ca.sum1(after * f_x).T - w_lo))
+        if "exact_handovers" in self.needs:
+            # each active hand-over at the crossing of its two curves: the runs' angle
+            # increments are then the exact mean, not a lower estimate
+            b.row(f"handover_crossings[{tag}]", ca.sum1(before * f_x).T -
+                  ca.sum1(after * f_x).T)
         th_start = ca.sum1(after * th).T
         th_next = ca.sum1(after * ca.horzcat(th[:, 1:], th[:, :1])).T
         th_first = ca.sum1(after * ca.repmat(th[:, 0], 1, M)).T
@@ -654,6 +663,10 @@ class PhaseNLP:
             idle = np.ones(self.slots, bool)
             idle[:len(seq)] = False
             lbg[rows] = np.where(np.concatenate([idle, idle]), -np.inf, 0.0)
+            if "exact_handovers" in self.needs:
+                rows = L.find(L.g, f"handover_crossings[{tag}]")
+                lbg[rows] = np.where(idle, -np.inf, 0.0)
+                ubg[rows] = np.where(idle, np.inf, 0.0)
         for name, criterion in self._criterion_blocks:
             lower, upper = criterion.bounds(problem, tightening_deg)
             lbg[L.find(L.g, name)], ubg[L.find(L.g, name)] = lower, upper

@@ -6,6 +6,8 @@ transmission angle refined between samples). Their NLP forms are the envelope's 
 """
 from __future__ import annotations
 
+import math
+
 from optdesign.quantities.base import Quantity
 
 
@@ -31,6 +33,14 @@ class Ratio(StrokeFigure):
 
     def read(self, figures, ripple):
         return figures.ratio
+
+    def nlp_needs(self, lower, upper):
+        """The NLP's mean sums the driving curve's angle increments between hand-over angles
+        that are free inside their troughs' windows: any wrong boundary selects a lower curve,
+        so it never over-states the mean (safe for a floor). Under a cap it would be pushed
+        below the true mean; the hand-over angles are then held at the curves' crossings,
+        where the sum is the exact mean (Sharkov & Kalinin 2022, eq. 8: ω_out = max_k ω_k)."""
+        return frozenset({"exact_handovers"}) if math.isfinite(upper) else frozenset()
 
 
 class Ripple(StrokeFigure):

@@ -170,9 +170,9 @@ TOP_KEYS = names(TOP_DECLARATIONS)
 OBJECTIVE_KEYS: tuple[Key, ...] = (
     Key("minimize", "choice", "what the solve minimises: ripple (δ, the worst over the listed "
         "eccentricities), -ratio (the largest ratio with δ at most max_ripple), "
-        "-transmission_angle (the largest least transmission angle), or a quantity's worst "
-        "over the listed eccentricities: housing_radius, peak_acceleration, or -swing (the "
-        "largest least swing)",
+        "-transmission_angle (the largest least transmission angle), or any quantity's worst "
+        "over the listed eccentricities, least (NAME: housing_radius, ratio, ...) or largest "
+        "(-NAME: -swing, -ripple, ...)",
         default=Objective.minimize, choices=lambda: tuple(objectives())),
     Key("ripple", "choice", "the denominator of δ = (ω_max − ω_min)/ω_mid: midrange, "
         "(ω_max + ω_min)/2 as in the papers, or mean, the time mean of the output speed",

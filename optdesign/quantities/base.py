@@ -49,6 +49,8 @@ class Quantity:
     #: the eccentricity a criterion reads it at by default (None: the worst over the listed
     #: ones)
     at: ClassVar[float | None] = None
+    #: what it is in a sentence ("the largest ratio any design reaches"); default its name
+    words: ClassVar[str] = ""
 
     def exact(self, evaluation, eccentricity: float, ripple: str = "midrange") -> float:
         """The exact value of the evaluated design at ``eccentricity`` (one it was
@@ -68,12 +70,49 @@ class Quantity:
         """``upper`` for a quantity whose larger values are worse, else ``lower``."""
         return "upper" if self.worst == "max" else "lower"
 
-    def nlp_needs(self, lower: float, upper: float) -> frozenset[str]:
-        """What the NLP must hold exactly for a bound ``lower <= value <= upper`` on this
-        quantity to be safe: its NLP form is conservative in one direction, and a bound on the
-        other side asks for more (the ratio's mean needs exact hand-overs under a cap).
-        Empty by default: the form is exact, or conservative on the bound's side."""
+    # ------------------------------------------------------------------ its NLP form
+    #: how the NLP's figures of the quantity order: ``"max"`` when a larger figure is worse.
+    #: The figure is the value itself but for the transmission angle, held as cos²μ
+    #: (:meth:`to_figure`), which grows as μ shrinks.
+    @property
+    def figure_worst(self) -> str:
+        return self.worst
+
+    def to_figure(self, value: float) -> float:
+        """A value (a bound) in the NLP's figure: the identity but where the NLP holds a
+        monotone function of the value (cos²μ of an angle)."""
+        return value
+
+    def nlp_needs(self, sides) -> frozenset[str]:
+        """What the NLP must hold exactly for the quantity to be bounded or pushed towards
+        ``sides`` (``lower``: a lower bound, or maximised; ``upper``: an upper bound, or
+        minimised) safely: each NLP form is exact, or conservative on one side, and a bound on
+        the other side may ask for more (the ratio's mean needs exact hand-overs under a cap).
+        Empty by default."""
         return frozenset()
+
+    def track(self, builder, block) -> None:
+        """Add the variables and rows one eccentricity block needs for this quantity's
+        figures (a turn quantity's stationary points); none by default."""
+
+    def figures(self, block, attained: bool = False) -> list:
+        """The quantity's NLP figures in one eccentricity block (an
+        :class:`~optdesign.solver.nlp.EccentricityBlock`): each conservative towards the
+        quantity's natural side (:meth:`Quantity.natural_side`: never better than the exact
+        figure it stands for), or with ``attained`` each a figure the design attains (never
+        worse than the exact one, for a bound on the other side)."""
+        raise NotImplementedError
+
+    def sampled_value(self, view, eccentricity: float):
+        """The value per screened design at one eccentricity, from the screening's sampling
+        (a :class:`~optdesign.solver.screening.SampledView`): ranks designs, certifies none."""
+        raise NotImplementedError
+
+    def start_angles(self, design, eccentricity: float, sampled=None) -> dict:
+        """Start values of the variables :meth:`track` adds for one block, by the suffix of
+        their name (``angles`` and ``constant`` for a turn quantity's stationary points),
+        from the exact evaluation of ``design``; none by default."""
+        return {}
 
     def __repr__(self) -> str:
         return f"<quantity {self.name} [{self.unit}]>"
@@ -143,6 +182,26 @@ class TurnQuantity(Quantity):
         maxima = self.maxima(evaluation.design, eccentricity, at.sampled).values
         figures = np.asarray(self.components(maxima, evaluation.input_speed), dtype=float)
         return self.worst_of(figures)
+
+    def track(self, builder, block):
+        """A free angle per component with g_i'(φ_i) = 0 (a stationary point, windowed like the
+        peaks by the driver), so each component is held at its exact extreme."""
+        tracked = self.tracked(block.model, block.count, block.options)
+        phi_q = builder.variable(f"phi_q_{self.name}_{block.tag}", tracked.size1_in(0))
+        values, slopes = tracked(phi_q, block.pvec)
+        builder.row(f"q_stationary_{self.name}[{block.tag}]", slopes)
+        block.tracked[self.name] = self.components(values, block.input_speed)
+
+    def figures(self, block, attained=False):
+        """The components at their exact stationary points: exact, so both forms are one."""
+        return [block.tracked[self.name]]
+
+    def sampled_value(self, view, eccentricity):
+        return self.sampled(view.turn(self, eccentricity), view.input_speed)
+
+    def start_angles(self, design, eccentricity, sampled=None):
+        maxima = self.maxima(design, eccentricity, sampled)
+        return {"angles": maxima.angles, "constant": maxima.constant}
 
     def sampled(self, grid: np.ndarray, input_speed: float) -> np.ndarray:
         """The value from g sampled at (components, [designs,] angles): the screening's

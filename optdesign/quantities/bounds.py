@@ -1,10 +1,12 @@
 """Bounds on quantities in a problem file: ``constraints: {QUANTITY: {lower, upper, at}}``.
 
 A bound holds a quantity's value at one listed eccentricity (``at: 0.5``) or its worst over
-the listed ones (``at: worst``, the default; the ratio's own default is e = 1). A bound is
-given on the side where the quantity grows worse (an upper bound on the housing radius, a lower
-one on the swing), which the NLP holds exactly at every tracked extreme; the ratio takes both.
-Three bounds are the file's older keys under a new name, with the same meaning:
+the listed ones (``at: worst``, the default; the ratio's own default is e = 1). Every quantity
+takes a bound on either side or both: on the side where it grows worse (an upper bound on the
+housing radius, a lower one on the swing) the NLP holds every tracked extreme within it; on the
+other side (a housing at least so large, a ratio band's cap) it holds the extreme the design
+attains (:mod:`optdesign.solver.nlp`). Three bounds are the file's older keys under a new
+name, with the same meaning:
 ``ratio: {lower}`` is ``objective.min_ratio``, ``ripple: {upper}`` is ``objective.max_ripple``
 and ``transmission_angle: {lower}`` is ``constraints.min_transmission_angle_deg``.
 """
@@ -16,8 +18,6 @@ from dataclasses import dataclass
 from optdesign.declarations import Key
 from optdesign.quantities import get_quantity, known
 
-#: the bounds each quantity takes, besides its natural side (see the module's docstring)
-BOTH_SIDES = frozenset({"ratio"})
 #: quantities a bound may name at a single eccentricity (``at: E``)
 AT_ONE_ECCENTRICITY = frozenset({"housing_radius", "peak_acceleration", "swing", "peak_speed",
                                  "ripple"})
@@ -47,7 +47,7 @@ def declarations() -> tuple[Key, ...]:
     out = []
     for name in known():
         q = get_quantity(name)
-        sides = ("lower", "upper") if name in BOTH_SIDES else (q.natural_side(),)
+        sides = _sides(q)
         keys = tuple(Key(side, "number", f"the {side} bound", unit=q.unit,
                          default_text="none") for side in sides)
         at = Key("at", "either", "the eccentricity the bound holds at: worst (over the listed "
@@ -67,6 +67,12 @@ def declarations() -> tuple[Key, ...]:
     return tuple(out)
 
 
+def _sides(quantity) -> tuple[str, str]:
+    """A quantity's sides, the one where it grows worse first (the reference's example)."""
+    natural = quantity.natural_side()
+    return (natural, "upper" if natural == "lower" else "lower")
+
+
 #: a plausible bound per quantity, for the generated reference and the starting file
 _EXAMPLES = {"housing_radius": 280.0, "peak_acceleration": 5000.0, "swing": 20.0,
              "peak_speed": 40.0, "ratio": 0.3, "ripple": 0.2, "transmission_angle": 40.0}
@@ -79,13 +85,8 @@ def read_bound(r, name: str, raw, eccentricities) -> QuantityBound:
     q = get_quantity(name)
     where = f"constraints.{name}"
     block = r.mapping(raw, where)
-    sides = ("lower", "upper") if name in BOTH_SIDES else (q.natural_side(),)
+    sides = _sides(q)
     allowed = set(sides) | ({"at"} if name in AT_ONE_ECCENTRICITY else set())
-    for side in ("lower", "upper"):
-        if side in block and side not in sides:
-            raise r.error(f"{where}.{side}",
-                          f"is not held: {name} is bounded on the side where it grows worse "
-                          f"({sides[0]}), e.g. {{{sides[0]}: {_EXAMPLES.get(name, 1.0):g}}}")
     r.known_keys(block, where, allowed)
     values = {side: r.number(block[side], f"{where}.{side}") for side in sides if side in block}
     if not values:

@@ -13,7 +13,7 @@ computed anew for every solve (a Pareto sweep's ε is a bound, not a rebuild of 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from typing import Any, Mapping
 
@@ -90,17 +90,18 @@ def searched_quantities(design) -> tuple[str, ...]:
                  and get_quantity(n).defined_for(design))
 
 
+def value_of(problem, spec: QuantityBound, ev) -> float:
+    """The exact value of ``spec``'s quantity on an evaluation of ``problem``'s design: at
+    its eccentricity, or its worst over the listed ones (and the regulation interval)."""
+    if spec.at is None:
+        return quantities_of(ev, problem.eccentricities, problem.objective.ripple,
+                             names=(spec.name,))["values"][spec.name]
+    return float(get_quantity(spec.name).exact(ev, spec.at, problem.objective.ripple))
+
+
 def measured_quantities(problem, ev) -> dict[str, float]:
     """The exact value of every :func:`quantity_specs` of ``problem`` on the evaluation."""
-    out = {}
-    ripple = problem.objective.ripple
-    for spec in quantity_specs(problem):
-        if spec.at is None:
-            out[spec.key] = quantities_of(ev, problem.eccentricities, ripple,
-                                          names=(spec.name,))["values"][spec.name]
-        else:
-            out[spec.key] = float(get_quantity(spec.name).exact(ev, spec.at, ripple))
-    return out
+    return {spec.key: value_of(problem, spec, ev) for spec in quantity_specs(problem)}
 
 
 # --------------------------------------------------------------------------- constraints
@@ -109,6 +110,9 @@ class Constraint:
 
     name: str = ""
     unit: str = ""
+    #: the NLP holds it at tracked extremes, and a violation the exact check still finds
+    #: between them tightens the NLP's bound by that much (``tightening_deg``)
+    tightens: bool = False
 
     def rows(self, q) -> list[tuple[str, Any]]:
         """(block name, CasADi expression) pairs for the NLP."""
@@ -127,6 +131,20 @@ class Constraint:
         """The problem file's key of this constraint, as the user wrote it (messages name
         it, never an NLP row)."""
         return f"constraints.{self.name}"
+
+    def quantity_bound(self, problem) -> QuantityBound | None:
+        """The bound on a quantity this constraint holds (the older keys read as one:
+        ``min_ratio`` is the ratio's lower bound), or None where it bounds no quantity."""
+        return None
+
+    def without(self, problem):
+        """``problem`` with this constraint dropped (every other kept)."""
+        raise NotImplementedError
+
+    def row_bounds(self, problem, row: str, tightening_deg: float = 0.0) -> tuple[float, float]:
+        """The bounds of one of its NLP rows (by the row's name): :meth:`bounds` unless the
+        rows hold another figure of the value."""
+        return self.bounds(problem, tightening_deg)
 
     def bound_per_unit(self, problem, lower: bool) -> tuple[float, str]:
         """How the NLP row's bound moves per unit of the designer's bound, and that unit:
@@ -149,6 +167,7 @@ class TransmissionAngle(Constraint):
 
     name = "transmission_angle"
     unit = "deg"
+    tightens = True
 
     def rows(self, q):
         return [(f"{self.name}[{tag}]", cos_sq) for tag, cos_sq in q.cos_mu_sq.items()]
@@ -165,6 +184,14 @@ class TransmissionAngle(Constraint):
     def key(self, problem):
         return problem.constraints.spelled.get(self.name,
                                                "constraints.min_transmission_angle_deg")
+
+    def quantity_bound(self, problem):
+        mu = problem.constraints.min_transmission_angle_deg
+        return QuantityBound("transmission_angle", lower=mu) if mu > 0 else None
+
+    def without(self, problem):
+        return replace(problem, constraints=replace(problem.constraints,
+                                                    min_transmission_angle_deg=0.0))
 
     def bound_per_unit(self, problem, lower):
         """The row's bound is cos²μ_min: d cos²μ_min / dμ_min = -sin 2μ_min per radian."""
@@ -189,6 +216,13 @@ class RatioFloor(Constraint):
     def key(self, problem):
         return problem.constraints.spelled.get(self.name, "objective.min_ratio")
 
+    def quantity_bound(self, problem):
+        floor = problem.objective.min_ratio
+        return QuantityBound("ratio", lower=floor) if floor > 0 else None
+
+    def without(self, problem):
+        return replace(problem, objective=replace(problem.objective, min_ratio=0.0))
+
 
 class RippleCap(Constraint):
     """worst δ <= max_ripple, with the largest-ratio objective."""
@@ -203,6 +237,13 @@ class RippleCap(Constraint):
 
     def key(self, problem):
         return problem.constraints.spelled.get(self.name, "objective.max_ripple")
+
+    def quantity_bound(self, problem):
+        cap = problem.objective.max_ripple
+        return QuantityBound("ripple", upper=cap) if cap is not None else None
+
+    def without(self, problem):
+        return replace(problem, objective=replace(problem.objective, max_ripple=None))
 
 
 class LengthConstraint(Constraint):
@@ -242,6 +283,39 @@ def result_columns(problem) -> dict[str, str]:
             for c in constraints_of(problem) if isinstance(c, LengthConstraint) and c.column}
 
 
+def bounded_sides(spec: QuantityBound) -> frozenset[str]:
+    """The sides ``spec`` bounds: ``lower``, ``upper`` or both."""
+    return frozenset(side for side in ("lower", "upper")
+                     if math.isfinite(getattr(spec, side)))
+
+
+def spec_sides(problem, specs) -> dict[str, frozenset[str]]:
+    """Per spec key, the sides the problem holds or pushes that quantity towards: its bounds'
+    (``lower``, ``upper``) and the objective's (``lower`` when maximised, ``upper`` when
+    minimised)."""
+    objective = objective_of(problem)
+    out = {s.key: frozenset() for s in specs}
+    for spec in problem.constraints.quantities:
+        out[spec.key] = out.get(spec.key, frozenset()) | bounded_sides(spec)
+    if isinstance(objective, QuantityObjective) and objective.quantity in out:
+        out[objective.quantity] |= {"lower" if objective.maximize else "upper"}
+    return out
+
+
+def spec_forms(problem, specs) -> dict[str, frozenset[str]]:
+    """Per spec key, the NLP forms it needs: ``natural`` for its natural side (and where
+    nothing bounds it: it is read over the regulation interval), ``attained`` for the
+    other."""
+    out = {}
+    bounded = {s.key for s in problem.constraints.quantities}   # a row each, always
+    for key, sides in spec_sides(problem, specs).items():
+        natural = get_quantity(next(s.name for s in specs if s.key == key)).natural_side()
+        forms = {"natural"} if natural in sides or key in bounded else set()
+        out[key] = frozenset(forms | ({"attained"} if sides - {natural} else set()) or
+                             {"natural"})
+    return out
+
+
 def quantity_tolerance(value) -> float:
     """The exact check's tolerance of a quantity's bound at ``value``: relative, at least
     TOL_QUANTITY_REL in the quantity's unit (the NLP holds the bound to IPOPT's tolerance)."""
@@ -254,10 +328,17 @@ def bound_excess(spec: QuantityBound, value: float) -> float:
     return max(spec.lower - value, value - spec.upper) - quantity_tolerance(value)
 
 
+#: the suffix of the NLP row that holds a bound on a quantity's other side
+ATTAINED = ".attained"
+
+
 class QuantityConstraint(Constraint):
     """``lower <= value <= upper`` of a quantity (``constraints: {QUANTITY: {...}}``): the
-    NLP holds it at the quantity's epigraph, which bounds every tracked extreme
-    (:mod:`optdesign.solver.nlp`); the exact check reads the quantity's exact form."""
+    NLP holds the bound on the quantity's natural side at its natural form (the epigraph of
+    its figures, conservative: every tracked extreme within the bound) and a bound on the
+    other side at its attained form (a figure the design reaches, picked at the start), each
+    in the NLP's figure of the value (:meth:`~optdesign.quantities.base.Quantity.to_figure`);
+    the exact check reads the quantity's exact form."""
 
     def __init__(self, spec: QuantityBound):
         self.spec = spec
@@ -267,6 +348,29 @@ class QuantityConstraint(Constraint):
 
     def value(self, q):
         return q.quantities[self.spec.key]
+
+    def rows(self, q):
+        """The natural side's row always (a Pareto sweep's ε moves its bound, built once);
+        the attained form's where the other side is bounded."""
+        quantity = get_quantity(self.spec.name)
+        out = [(self.name, q.quantities[self.spec.key])]
+        if bounded_sides(self.spec) - {quantity.natural_side()}:
+            out.append((self.name + ATTAINED, q.attained[self.spec.key]))
+        return out
+
+    def row_bounds(self, problem, row, tightening_deg=0.0):
+        """The row's side of the bound, in the NLP's figure (a decreasing figure, cos²μ of
+        an angle, turns a lower bound into an upper one)."""
+        quantity = get_quantity(self.spec.name)
+        lower, upper = self.bounds(problem)
+        natural = quantity.natural_side()
+        side = natural if not row.split("[", 1)[0].endswith(ATTAINED) else \
+            ("lower" if natural == "upper" else "upper")
+        value = lower if side == "lower" else upper
+        if quantity.figure_worst != quantity.worst:
+            side = "lower" if side == "upper" else "upper"
+        figure = quantity.to_figure(value)
+        return (figure, math.inf) if side == "lower" else (-math.inf, figure)
 
     def bounds(self, problem, tightening_deg=0.0):
         """The bound of ``problem``'s spec of this key (a Pareto point's ε moves it without
@@ -278,6 +382,13 @@ class QuantityConstraint(Constraint):
     def tolerance(self, m):
         """Relative to the value: the NLP holds the bound to IPOPT's tolerance."""
         return quantity_tolerance(self.value(m))
+
+    def quantity_bound(self, problem):
+        return self.spec
+
+    def without(self, problem):
+        others = tuple(s for s in problem.constraints.quantities if s.key != self.spec.key)
+        return replace(problem, constraints=replace(problem.constraints, quantities=others))
 
     def key(self, problem):
         """``constraints.ratio.upper``: the side where one is given alone."""
@@ -392,18 +503,29 @@ class LargestRatio(Objective):
 
 
 class QuantityObjective(Objective):
-    """The worst of a quantity over the listed eccentricities: least when larger is worse
-    (``minimize: housing_radius``), largest when smaller is (``minimize: -swing``); the
-    worst δ breaks ties, as for the largest ratio."""
+    """The worst of a quantity over the listed eccentricities, least (``minimize: NAME``)
+    or largest (``minimize: -NAME``); the worst δ breaks ties, as for the largest ratio. The
+    NLP reads the quantity's natural form when the objective pushes it towards its natural
+    side (the least housing radius, the largest least swing) and its attained form otherwise
+    (:mod:`optdesign.solver.nlp`), each in its NLP figure (cos²μ for the angle)."""
 
     quantity: str = ""
+    maximize: bool = False
 
     @property
     def sign(self) -> float:
-        return 1.0 if get_quantity(self.quantity).worst == "max" else -1.0
+        return -1.0 if self.maximize else 1.0
+
+    @property
+    def natural(self) -> bool:
+        """Whether the objective pushes the quantity towards its natural side."""
+        return self.maximize == (get_quantity(self.quantity).worst == "min")
 
     def expression(self, q):
-        return self.sign * q.quantities[self.quantity] + RIPPLE_TIE_BREAK * q.worst_ripple
+        quantity = get_quantity(self.quantity)
+        figure = (q.quantities if self.natural else q.attained)[self.quantity]
+        increasing = 1.0 if quantity.figure_worst == quantity.worst else -1.0
+        return self.sign * increasing * figure + RIPPLE_TIE_BREAK * q.worst_ripple
 
     def key(self, m):
         return self.sign * m.quantities[self.quantity]
@@ -419,11 +541,9 @@ class LargestLeastAngle(QuantityObjective):
     exact key is the least angle itself (degrees, negated); the worst δ breaks ties."""
 
     quantity = "transmission_angle"
+    maximize = True
     name = "-transmission_angle"
     symbol = "(-μ_min)"
-
-    def expression(self, q):
-        return q.quantities[self.quantity] + RIPPLE_TIE_BREAK * q.worst_ripple
 
     def per_nlp_unit(self, m) -> float:
         """Degrees of −μ_min per unit of cos²μ_min: d cos²μ / d(−μ) = sin 2μ per radian."""
@@ -432,8 +552,7 @@ class LargestLeastAngle(QuantityObjective):
 
 
 def _quantity_objectives() -> dict[str, type[Objective]]:
-    """``minimize: NAME`` for every quantity tracked over the turn whose larger values are
-    worse, ``minimize: -NAME`` for those whose smaller ones are."""
+    """``minimize: NAME`` (least) and ``minimize: -NAME`` (largest) for every quantity."""
     return _objectives_of(known())
 
 
@@ -442,13 +561,13 @@ def _objectives_of(names: tuple[str, ...]) -> dict[str, type[Objective]]:
     out: dict[str, type[Objective]] = {}
     for name in names:
         q = get_quantity(name)
-        if isinstance(q, TurnQuantity):
-            key = name if q.worst == "max" else f"-{name}"
-            out[key] = type(f"Objective_{name}", (QuantityObjective,),
-                            {"quantity": name, "name": key,
-                             "symbol": name if q.worst == "max" else f"(-{name})",
-                             "__doc__": f"{'Least' if q.worst == 'max' else 'Largest'} "
-                                        f"{q.label}."})
+        for maximize in (False, True):
+            key = f"-{name}" if maximize else name
+            out[key] = type(f"Objective_{'largest' if maximize else 'least'}_{name}",
+                            (QuantityObjective,),
+                            {"quantity": name, "maximize": maximize, "name": key,
+                             "symbol": f"(-{name})" if maximize else name,
+                             "__doc__": f"{'Largest' if maximize else 'Least'} {q.label}."})
     return out
 
 
@@ -458,9 +577,9 @@ OBJECTIVES: dict[str, type[Objective]] = {"ripple": LeastRipple, "-ratio": Large
 
 
 def objectives() -> dict[str, type[Objective]]:
-    """Every name ``objective.minimize`` takes: :data:`OBJECTIVES` and one per quantity
-    tracked over the turn (the registry as it is now)."""
-    return OBJECTIVES | _quantity_objectives()
+    """Every name ``objective.minimize`` takes: :data:`OBJECTIVES` and two per quantity, its
+    least and its largest (the registry as it is now)."""
+    return OBJECTIVES | {k: v for k, v in _quantity_objectives().items() if k not in OBJECTIVES}
 
 
 def objective_of(problem) -> Objective:

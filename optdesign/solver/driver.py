@@ -213,13 +213,16 @@ class PhaseSolver:
                     continue
                 note = (f"the worst eccentricity {ver.worst_eccentricity:g} of the interval "
                         f"still moved after {MAX_REGULATION_STEPS} re-solves")
-            if "transmission_angle" in ver.violations:
-                tightening += ver.violations["transmission_angle"] + ANGLE_SAFETY_DEG
+            dips = [ver.violations[c.name] for c in constraints_of(problem)
+                    if c.tightens and c.name in ver.violations]
+            if dips:        # a dip between the NLP's tracked extremes: hold the bound tighter
+                tightening += max(dips) + ANGLE_SAFETY_DEG
                 continue
             if any(spec.key in ver.violations for spec in quantity_specs(problem)):
                 continue        # another extreme than the tracked one became the largest
-            if not _same_cycles(ver.sequences, given) or run.at_window:
-                continue        # hand-overs changed order, or an angle ran to its window
+            if not _same_cycles(ver.sequences, given) or run.at_window or run.picks_moved:
+                continue        # hand-overs changed order, an angle ran to its window, or
+                #                 the attained figure moved to another curve or joint
             if robust:
                 # the tolerance box's worst parts of this optimum: a part rougher than the
                 # bound t, or one that breaks the angle, becomes a scenario; re-solve. The
@@ -297,9 +300,10 @@ class PhaseSolver:
             solver = nlp.solver(hessian)
         nlp.watch.start([np.array([v[k] for k in nlp.free]) / nlp.scale for v in self.avoid],
                         lbg, ubg, None if budget is None else max(budget, 1))
+        x0 = nlp.start(guess, lbx, ubx, params)
+        params = nlp.with_picks(x0, params, ver.sequences)
         with self.timings.stage("ipopt"), interrupts_kept():   # CasADi swallows Ctrl-C
-            sol = solver(x0=nlp.start(guess, lbx, ubx, params), lbx=lbx, ubx=ubx, lbg=lbg,
-                         ubg=ubg, p=params)
+            sol = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=params)
         stats = solver.stats()
         x = np.array(sol["x"]).ravel()
         joined = nlp.watch.joined
@@ -311,6 +315,7 @@ class PhaseSolver:
                     multiplier=nlp.multiplier(sol["lam_g"], "min_ratio"),
                     binding_parts=nlp.binding_scenarios(sol["lam_g"], ver.held),
                     at_window=nlp.at_window_bound(x, lbx, ubx),
+                    picks_moved=nlp.picks_moved(x, params, ver.sequences),
                     binding="" if joined else nlp.binding(np.array(sol["g"]).ravel(), lbg, ubg),
                     active=nlp.active_set(problem, x, sol["lam_x"], sol["lam_g"], lbx, ubx))
 
@@ -328,6 +333,7 @@ class _Run:
     binding: str
     active: list            # what binds at the solution, with d objective / d bound
     binding_parts: tuple = ()   # a robust solve's held parts that bind (their offsets)
+    picks_moved: bool = False   # an attained form's worst candidate moved (NLP.picks_moved)
 
 
 class _Polishing:

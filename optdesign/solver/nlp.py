@@ -46,8 +46,9 @@ import numpy as np
 
 from optdesign.envelope.sampled import STROKE_SIGNS, ripple_of
 from optdesign.evaluation.figures import eccentricities_of
-from optdesign.quantities import TurnQuantity, get_quantity
+from optdesign.quantities import get_quantity
 from optdesign.quantities.criteria import (constraints_of, interval_quantities, objective_of,
+                                           spec_forms, spec_sides,
                                            quantity_specs)
 
 IPOPT_OPTIONS = {
@@ -108,6 +109,42 @@ class Quantities:
     #: a bound's or the objective's quantity by its key (criteria.quantity_specs): the
     #: epigraph of its tracked extremes, or the envelope's own expression
     quantities: dict = field(default_factory=dict)
+    #: the same specs' attained forms, where a bound on the other side or the objective's
+    #: direction reads one (:meth:`PhaseNLP._quantities`)
+    attained: dict = field(default_factory=dict)
+
+
+class EccentricityBlock:
+    """What one eccentricity block of the NLP offers the quantities' NLP forms
+    (:meth:`optdesign.quantities.base.Quantity.figures`): the envelope's variables and
+    expressions (speeds per unit e·ω1), cos²μ at its tracked extremes, the turn quantities'
+    tracked components, and picks made at the start of each solve (a parameter one-hot over
+    the candidates, :meth:`PhaseNLP.with_picks`), created when a form asks for them."""
+
+    def __init__(self, nlp: "PhaseNLP", builder: "_Builder", tag: str, e, pvec):
+        self.nlp, self.builder, self.tag, self.e, self.pvec = nlp, builder, tag, e, pvec
+        self.model, self.count = nlp.model, nlp.count
+        self.options = tuple(sorted(nlp.problem.options.items()))
+        self.input_speed = nlp.problem.input_speed
+        self.tracked: dict = {}
+        # set by PhaseNLP._eccentricity
+        self.w_hi = self.w_lo = self.mean = self.ripple = self.cos_sq = None
+        self.peaks = self.troughs = None            # f_c at each curve's peak, f at each slot
+
+    def ripple_of(self, high, low):
+        """δ of the problem's definition from these extremes and the block's mean."""
+        return ripple_of(high, low, self.mean, self.nlp.problem.objective.ripple)
+
+    def picked_peak(self):
+        """The exact peak of the curve fastest at the start (<= w_hi, the true ω_max)."""
+        return self.nlp.pick(self.builder, f"peak_pick_{self.tag}", self.peaks, "max",
+                             self.tag, slots=False)
+
+    def picked_trough(self):
+        """The speed at the active hand-over slowest at the start, held at its crossing
+        (an envelope minimum: >= the true ω_min)."""
+        return self.nlp.pick(self.builder, f"trough_pick_{self.tag}", self.troughs, "min",
+                             self.tag, slots=True)
 
 
 #: parameterised eccentricity slots of a problem with a regulation interval: the worst interior
@@ -338,13 +375,22 @@ class PhaseNLP:
         #: bounds and the objective on quantities; the turn quantities among them are
         #: tracked at exact stationary points in every listed eccentricity's block
         self.specs = quantity_specs(problem)
-        self.turn = sorted({s.name for s in self.specs
-                            if isinstance(get_quantity(s.name), TurnQuantity)})
-        #: what the bounds need held exactly beyond the conservative forms (a cap on the
-        #: ratio: the hand-over angles at the curves' crossings)
-        self.needs = frozenset().union(*(get_quantity(s.name).nlp_needs(s.lower, s.upper)
+        #: the quantities whose figures need variables and rows of their own in a block
+        #: (a turn quantity's stationary points), filled as the blocks are built
+        self.turn: list[str] = []
+        #: per spec, the forms its bounds and the objective read: ``natural`` (conservative
+        #: towards the quantity's natural side) and ``attained`` (for the other side)
+        self.forms = spec_forms(problem, self.specs)
+        #: what they need held exactly beyond the conservative forms (a cap on the ratio: the
+        #: hand-over angles at the curves' crossings)
+        sides = spec_sides(problem, self.specs)
+        self.needs = frozenset().union(*(get_quantity(s.name).nlp_needs(sides[s.key])
                                          for s in self.specs))
-        self._quantity_rows: dict = {}
+        #: the picks of the attained forms: (parameter, candidates, worst, tag, slot mask)
+        self._picks: list[tuple] = []
+        self._pick_params: dict = {}
+        #: (quantity, block tag) of every block that tracks a quantity's figures
+        self._tracked: set = set()
         self.layout = Layout()
         self._solvers: dict[str, ca.Function] = {}
         self.watch: _Watch | None = None
@@ -406,29 +452,30 @@ class PhaseNLP:
         fn = self.model.kinematics(self.count, tuple(sorted(P.options.items())))
         functions = (self._sample_function(fn).map(self.phi.size), self._points_function(),
                      self._slot_function(fn).map(self.slots))
-        ripples, means, peaks, cos_sq = [], [], [], {}
         self._derived: dict[str, ca.MX] = {}
         slots = [b.parameter(f"eccentricity_{slot_tag(j)}", 1) for j in range(self.n_slots)]
+        every: list[EccentricityBlock] = []
 
-        def blocks(part: dict, tags, eccs, sq: dict) -> None:
+        def blocks(part: dict, tags, eccs) -> dict:
             """One eccentricity block per (tag, e) for the lengths ``part``."""
+            out = {}
             for tag, e in zip(tags, eccs):
                 pvec = ca.vertcat(*[part[k] * (e if k == self.model.regulating_variable else 1)
                                     for k in self.model.lengths])
-                ripple, mean, peak, sq[tag] = self._eccentricity(b, tag, e, pvec, functions)
-                ripples.append(ripple)
-                means.append(mean)
-                peaks.append(peak)
+                out[tag] = self._eccentricity(b, tag, e, pvec, functions)
+                every.append(out[tag])
+            return out
 
-        blocks(lengths, self.tags, list(self.eccs) + slots, cos_sq)      # the nominal's blocks
+        nominal = blocks(lengths, self.tags, list(self.eccs) + slots)
+        ripples = [x.ripple for x in nominal.values()]
         t = b.variable("worst_ripple", 1)
         b.row("ripple_epigraph", ca.vertcat(*[t - ripples[i] for i in self.listed]))
         if self.n_slots:            # the held interior eccentricities (free rows when idle)
             b.row("ripple_epigraph_slots", ca.vertcat(*[t - r for r in ripples[len(self.eccs):]]))
-        q = Quantities(lengths=lengths, ratio=means[0], worst_ripple=t,
-                       peak_speed=peaks[0] * P.input_speed, cos_mu_sq=cos_sq,
-                       quantities=self._quantities(b, t, ripples, means, self.tags,
-                                                   cos_sq))
+        first = nominal[self.tags[0]]
+        q = Quantities(lengths, first.mean, t, first.w_hi * P.input_speed,
+                       {tag: x.cos_sq for tag, x in nominal.items()},
+                       *self._quantities(b, nominal, self.tags))
         self._criterion_blocks = []
         for criterion in self.criteria:
             for name, expr in criterion.rows(q):
@@ -439,16 +486,14 @@ class PhaseNLP:
         for j in range(self.n_scenarios):
             offsets = b.parameter(f"offsets_{scenario_tag(j)}", len(self.model.lengths))
             part = {k: lengths[k] + offsets[i] for i, k in enumerate(self.model.lengths)}
-            first, sq = len(ripples), {}
-            blocks(part, self.scenario_tags[j], self.eccs, sq)
+            own = blocks(part, self.scenario_tags[j], self.eccs)
+            tags = self.scenario_tags[j]
             b.row(f"ripple_epigraph[{scenario_tag(j)}]",
-                  ca.vertcat(*[t - ripples[first + i] for i in self.listed]))
-            own = slice(first, first + len(self.eccs))
-            qj = Quantities(lengths=part, ratio=means[first], worst_ripple=t,
-                            peak_speed=peaks[first] * P.input_speed, cos_mu_sq=sq,
-                            quantities=self._quantities(b, t, ripples[own], means[own],
-                                                        self.scenario_tags[j], sq,
-                                                        scenario_tag(j)))
+                  ca.vertcat(*[t - own[tags[i]].ripple for i in self.listed]))
+            head = own[tags[0]]
+            qj = Quantities(part, head.mean, t, head.w_hi * P.input_speed,
+                            {tag: x.cos_sq for tag, x in own.items()},
+                            *self._quantities(b, own, tags, scenario_tag(j)))
             for criterion in self.criteria:
                 for name, expr in criterion.rows(qj):
                     if not name.endswith(f"_{scenario_tag(j)}]"):
@@ -462,73 +507,92 @@ class PhaseNLP:
         self.f = self.objective.expression(q)
         self.n_x, self.n_g, self.n_p = self.x_sym.numel(), self.g.numel(), self.p_sym.numel()
         self.surrogate = ca.Function("surrogate", [self.x_sym, self.p_sym],
-                                     [ca.vertcat(*ripples), ca.vertcat(*means),
-                                      ca.vertcat(*peaks)])
+                                     [ca.vertcat(*[x.ripple for x in every]),
+                                      ca.vertcat(*[x.mean for x in every]),
+                                      ca.vertcat(*[x.w_hi for x in every])])
+        #: the candidates of every pick, evaluated at a run's start (:meth:`with_picks`)
+        self._candidates = ca.Function("candidates", [self.x_sym, self.p_sym],
+                                       [c for _, c, _, _, _ in self._picks])
 
-    def _quantities(self, b: "_Builder", t, ripples, means, tags, cos_sq: dict,
-                    scenario: str = "") -> dict:
-        """Each quantity spec's value for one part (the nominal, or ``scenario``'s part):
-        the envelope's own expression for the ratio and the ripple, else an epigraph
-        variable z over the spec's eccentricity blocks with rows z - c >= 0 for every figure
-        c of a quantity whose larger values are worse (c - z >= 0 for the others): a bound on
-        z, or z as the objective, holds every figure. ``tags``, ``ripples`` and ``means``:
-        the part's blocks in :attr:`eccs` order; ``cos_sq`` its cos²μ rows by tag, whose
-        epigraph is the least transmission angle's figure (cos² of it: smaller is better). The
-        nominal's spec at its worst covers the regulation interval's slots too, a row block
-        per slot (free while the slot is idle); a scenario's variables and rows carry its name
-        (fixed and free while it is idle)."""
-        out = {}
+    def _quantities(self, b: "_Builder", blocks: dict, tags, scenario: str = ""):
+        """Each quantity spec's value for one part (the nominal, or ``scenario``'s part), in
+        the forms its bounds and the objective read (:attr:`forms`): ``natural``, the figures'
+        epigraph z over the spec's eccentricity blocks (rows z - c >= 0 for every figure c of
+        a quantity whose larger figures are worse, c - z >= 0 for the others: a bound on z, or
+        z as the objective, holds every figure), or the figure itself where the spec has one;
+        ``attained``, the figure the start has worst, picked (:meth:`pick`), from the
+        figures the design attains. ``blocks``: the part's blocks by tag, ``tags`` in
+        :attr:`eccs` order. The nominal's spec at its worst covers the regulation interval's
+        slots too, a row block per slot (free while the slot is idle); a scenario's variables
+        and rows carry its name (fixed and free while it is idle). Returns (natural,
+        attained), each by the spec's key."""
+        natural, attained = {}, {}
         listed = [tags[i] for i in self.listed]
+        mark, where = (f"_{scenario}", f"[{scenario}]") if scenario else ("", "")
         for spec in self.specs:
-            at = [tags[self.eccs.index(spec.at)]] if spec.at is not None else listed
-            if spec.name == "ratio":
-                out[spec.key] = means[0]
-            elif spec.name == "ripple":
-                out[spec.key] = t if spec.at is None else ripples[tags.index(at[0])]
-            else:
-                z = b.variable(f"quantity_{spec.key}" + (f"_{scenario}" if scenario else ""), 1)
-                if spec.name == "transmission_angle":   # cos²μ: larger is worse
-                    sign, figure = 1, cos_sq.__getitem__
+            quantity = get_quantity(spec.name)
+            e = spec.at if spec.at is not None else quantity.at
+            at = [tags[self.eccs.index(e)]] if e is not None else listed
+            slots = self.slot_tags if e is None and not scenario else []
+            sign = 1 if quantity.figure_worst == "max" else -1
+            forms = self.forms[spec.key]
+            if "natural" in forms:
+                figures = ca.vertcat(*[f for tag in at for f in quantity.figures(blocks[tag])])
+                if figures.numel() == 1 and not slots:
+                    natural[spec.key] = figures
                 else:
-                    sign = 1 if get_quantity(spec.name).worst == "max" else -1
-                    figure = (lambda tag, name=spec.name: self._quantity_rows[(name, tag)])
-                b.row(f"quantity_epigraph_{spec.key}" + (f"[{scenario}]" if scenario else ""),
-                      sign * (z - ca.vertcat(*[figure(tag) for tag in at])))
-                for tag in self.slot_tags if spec.at is None and not scenario else ():
-                    b.row(f"quantity_epigraph_{spec.key}[{tag}]", sign * (z - figure(tag)))
-                out[spec.key] = z
-        return out
+                    z = b.variable(f"quantity_{spec.key}{mark}", 1)
+                    b.row(f"quantity_epigraph_{spec.key}{where}", sign * (z - figures))
+                    for tag in slots:
+                        b.row(f"quantity_epigraph_{spec.key}[{tag}]",
+                              sign * (z - ca.vertcat(*quantity.figures(blocks[tag]))))
+                    natural[spec.key] = z
+            if "attained" in forms:
+                figures = ca.vertcat(*[f for tag in at + slots
+                                       for f in quantity.figures(blocks[tag], attained=True)])
+                attained[spec.key] = figures if figures.numel() == 1 else self.pick(
+                    b, f"pick_{spec.key}{mark}", figures, quantity.figure_worst)
+        return natural, attained
 
-    def _tracked_quantities(self, b: "_Builder", tag: str, e, pvec, w_hi) -> None:
-        """The block's figures of every quantity a spec names: a turn quantity's components
-        at exact stationary points (a free angle per component with g_i'(φ_i) = 0, windowed
-        like the peaks), the peak speed from the block's w_hi; in the listed eccentricities'
-        blocks, the regulation interval's slots and the scenarios' listed blocks."""
+    def pick(self, b: "_Builder", name: str, candidates, worst: str, tag: str = "",
+             slots: bool = False):
+        """Σ pick_i · candidates_i with ``pick`` a one-hot parameter ``name``, set at each
+        run's start on the candidate that is worst there (:meth:`with_picks`; ``slots``: among
+        the active hand-over slots of block ``tag`` only); made once per name."""
+        made = next((p for p in self._picks if p[0] == name), None)
+        if made is None:
+            made = (name, b.parameter(name, candidates.numel()), worst, tag, slots)
+            self._picks.append((name, candidates, worst, tag, slots))
+            self._pick_params[name] = made[1]
+        return ca.dot(self._pick_params[name], candidates)
+
+    def _track(self, b: "_Builder", block: EccentricityBlock) -> None:
+        """The block's variables and rows of every quantity a spec names (a turn quantity's
+        stationary points, :meth:`~optdesign.quantities.base.Quantity.track`): in the listed
+        eccentricities' blocks, the regulation interval's slots and the scenarios' listed
+        blocks."""
         held = [self.tags[i] for i in self.listed] + self.slot_tags + \
             [tags[i] for tags in self.scenario_tags for i in self.listed]
-        if tag not in held:
+        if block.tag not in held:
             return
-        options = tuple(sorted(self.problem.options.items()))
-        for name in self.turn:
-            quantity = get_quantity(name)
-            tracked = quantity.tracked(self.model, self.count, options)
-            phi_q = b.variable(f"phi_q_{name}_{tag}", tracked.size1_in(0))
-            values, slopes = tracked(phi_q, pvec)
-            b.row(f"q_stationary_{name}[{tag}]", slopes)
-            self._quantity_rows[(name, tag)] = quantity.components(values,
-                                                                   self.problem.input_speed)
-        if any(s.name == "peak_speed" for s in self.specs):
-            self._quantity_rows[("peak_speed", tag)] = w_hi * e * self.problem.input_speed
+        for name in dict.fromkeys(s.name for s in self.specs):
+            get_quantity(name).track(b, block)
+            if name in block.tracked:
+                self._tracked.add((name, block.tag))
+                if name not in self.turn:
+                    self.turn.append(name)
 
     def _eccentricity(self, b: "_Builder", tag: str, e, pvec, functions):
-        """The variables and rows of one eccentricity block ``tag``: (δ_e, mean_e, w_hi, cos²μ
-        rows). ``e`` is a number, or a parameter (an eccentricity slot).
+        """The variables and rows of one eccentricity block ``tag``, as an
+        :class:`EccentricityBlock` (δ_e, mean_e, w_hi, cos²μ rows, the peaks and troughs).
+        ``e`` is a number, or a parameter (an eccentricity slot).
 
         Speeds are in units of e·ω1: they shrink like e, and at e = 1e-6 they would sit below
         IPOPT's tolerances (ripple and ratio are ratios, so the unit cancels).
         """
         sample_map, points, slot_map = functions
         C, M = self.n_curves, self.slots
+        block = EccentricityBlock(self, b, tag, e, pvec)
         w = b.variable(f"w_{tag}", 2)
         w_hi, w_lo = w[0], w[1]
         cos_mu_sq, lse, f_samples = sample_map(self.phi[None, :], pvec, 1.0 / e)
@@ -552,7 +616,7 @@ class PhaseNLP:
         if self.has_mu:
             b.row(f"mu_stationary[{tag}]", dcos_x)
             cos_sq = ca.vertcat(cos_sq, cos_x ** 2)
-        self._tracked_quantities(b, tag, e, pvec, w_hi)
+        self._track(b, block)
         # Exact troughs at the hand-overs, and the exact mean over the runs.
         phi_x = b.variable(f"phi_handover_{tag}", M)
         before = b.parameter(f"before_{tag}", C + 1, M)
@@ -579,8 +643,11 @@ class PhaseNLP:
         sums = b.variable(f"run_sums_{tag}", M)
         b.row(f"run_sums[{tag}]", sums - ca.vertcat(0, sums[:-1]) - increments)
         self._derived[f"run_sums_{tag}"] = ca.cumsum(increments)
-        mean = sums[M - 1] / (2 * math.pi * e)
-        return ripple_of(w_hi, w_lo, mean, self.problem.objective.ripple), mean, w_hi, cos_sq
+        block.w_hi, block.w_lo, block.cos_sq = w_hi, w_lo, cos_sq
+        block.mean = sums[M - 1] / (2 * math.pi * e)
+        block.ripple = ripple_of(w_hi, w_lo, block.mean, self.problem.objective.ripple)
+        block.peaks, block.troughs = f_m, ca.sum1(before * f_x).T
+        return block
 
     def solver(self, hessian: str) -> ca.Function:
         """IPOPT on this NLP with the exact Hessian or L-BFGS; each built at its first use.
@@ -641,6 +708,33 @@ class PhaseNLP:
                 p[L.find(L.p, f"{name}_{tag}")] = value.ravel(order="F")
         return p
 
+    def with_picks(self, x0: np.ndarray, p: np.ndarray, sequences) -> np.ndarray:
+        """``p`` with every pick (:meth:`pick`) on its worst candidate at the start ``x0``: a
+        block's picks (its fastest curve, its slowest active hand-over) first, then the specs'
+        over figures that read them."""
+        if not self._picks:
+            return p
+        p = np.array(p, dtype=float)
+        active = {tag: len(seq) for tag, seq in zip(self.tags, sequences)}
+        for _ in range(2):
+            values = self._candidates.call([x0, p])
+            for (name, _, worst, tag, slots), v in zip(self._picks, values):
+                v = np.array(v, dtype=float).ravel()
+                if slots:
+                    v = np.where(np.arange(v.size) < active.get(tag, v.size), v,
+                                 -np.inf if worst == "max" else np.inf)
+                v = np.nan_to_num(v, nan=-np.inf if worst == "max" else np.inf)
+                one = np.zeros(v.size)
+                one[int(np.argmax(v) if worst == "max" else np.argmin(v))] = 1.0
+                p[self.layout.find(self.layout.p, name)] = one
+        return p
+
+    def picks_moved(self, x: np.ndarray, p: np.ndarray, sequences) -> bool:
+        """Whether a pick's worst candidate at the solution ``x`` is another than the one the
+        run held (the attained figure moved to another curve, hand-over or joint): the
+        driver re-solves with the picks made there."""
+        return bool(self._picks) and not np.array_equal(self.with_picks(x, p, sequences), p)
+
     def constraint_bounds(self, problem, sequences, tightening_deg: float = 0.0,
                           held: Held | None = None, guess: dict | None = None):
         """lbg, ubg of one solve: the criteria's bounds (for ``problem``'s ε and caps), the
@@ -654,7 +748,7 @@ class PhaseNLP:
                 if self.has_mu or block != "mu_stationary":
                     lbg[L.find(L.g, f"{block}[{tag}]")] = ubg[L.find(L.g, f"{block}[{tag}]")] = 0.0
             for name in self.turn:
-                if (name, tag) in self._quantity_rows:
+                if (name, tag) in self._tracked:
                     rows = L.find(L.g, f"q_stationary_{name}[{tag}]")
                     constant = np.asarray((guess or {}).get(f"constant_{name}_{tag}", False))
                     lbg[rows] = np.where(constant, -np.inf, 0.0)
@@ -668,7 +762,7 @@ class PhaseNLP:
                 lbg[rows] = np.where(idle, -np.inf, 0.0)
                 ubg[rows] = np.where(idle, np.inf, 0.0)
         for name, criterion in self._criterion_blocks:
-            lower, upper = criterion.bounds(problem, tightening_deg)
+            lower, upper = criterion.row_bounds(problem, name, tightening_deg)
             lbg[L.find(L.g, name)], ubg[L.find(L.g, name)] = lower, upper
         if self.n_slots or self.n_scenarios:
             idle = self.idle_tags(held)
@@ -709,7 +803,7 @@ class PhaseNLP:
             lbx[sl] = np.where(active, centre - half_window, centre)
             ubx[sl] = np.where(active, centre + half_window, centre)
             for name in self.turn:
-                if (name, tag) in self._quantity_rows:
+                if (name, tag) in self._tracked:
                     sl = L.find(L.x, f"phi_q_{name}_{tag}")
                     centre = np.asarray(guess[f"phi_q_{name}_{tag}"], dtype=float)
                     constant = np.asarray(guess.get(f"constant_{name}_{tag}", False))

@@ -1,12 +1,14 @@
 """How far out of reach an infeasible bound is: the nearest value any design in the bounds
 reaches.
 
-When no start of a count meets the problem, a constraint that may bind (the ratio floor, the
-transmission angle, a ripple cap, a bound on a quantity; the one IPOPT names first) is dropped
-and its own figure made the objective of the same NLP, every other constraint kept: the largest ratio, the largest
-least transmission angle, the least ripple, the least housing radius (the largest least swing)
-any design in the bounds reaches. Below (above) the file's bound, the count is infeasible by
-that much; at or beyond it, a design that meets the bound exists and more starts may find it.
+When no start of a count meets the problem, a bound that may bind (the ratio floor, the
+transmission angle, a ripple cap, a bound on a quantity, on either side; the one IPOPT names
+first) is dropped and its quantity, pushed towards the bound, made the objective of the same
+problem, every other constraint kept: the largest ratio, the least ratio under a cap, the
+largest least transmission angle, the least ripple, the least housing radius any design in the
+bounds reaches. Beyond the file's bound, the count is infeasible by that much (the relaxed
+optimum verified exactly, and no design the solve has seen doing better); at or within it, the
+relaxed optimum meets every constraint and the solve polishes from it.
 """
 from __future__ import annotations
 
@@ -14,7 +16,8 @@ import math
 from dataclasses import asdict, dataclass, replace
 
 from optdesign.quantities import get_quantity
-from optdesign.quantities.criteria import constraints_of, objectives
+from optdesign.quantities.criteria import (bounded_sides, constraints_of, objective_of,
+                                           objectives, value_of)
 from optdesign.solver.verify import verify
 
 #: the ripple cap of the largest-ratio solve that finds the largest reachable ratio
@@ -54,56 +57,47 @@ class Reach:
 
 def candidates(problem, binding: str | None) -> list[str]:
     """The constraints that may make the problem infeasible, the one IPOPT found binding
-    first: the ratio floor, the transmission angle, the ripple cap and every bound on a
-    quantity at its worst."""
+    first: every constraint that holds one side of a quantity at its worst (the older keys
+    read as quantity bounds: the ratio floor, the transmission angle, the ripple cap)."""
     out = [(binding or "").split("[", 1)[0]]
-    obj, c = problem.objective, problem.constraints
-    out += ["min_ratio"] if obj.min_ratio > 0 else []
-    out += ["transmission_angle"] if c.min_transmission_angle_deg > 0 else []
-    out += ["max_ripple"] if obj.max_ripple is not None else []
-    out += [s.key for s in c.quantities if s.at is None]
+    for criterion in constraints_of(problem):
+        spec = criterion.quantity_bound(problem)
+        if spec is not None and spec.at is None:
+            out.append(criterion.name)
     return list(dict.fromkeys(n for n in out if n))
 
 
 def relaxed(problem, name: str):
-    """(the problem with constraint ``name`` dropped and its figure the objective, the
-    figure read off a :class:`~optdesign.quantities.criteria.Measured` design, the figure in
-    words, the side, the file's bound, the unit), or None where no objective measures that
-    figure. Every other constraint is kept (a ripple cap under the largest ratio too)."""
-    obj, c = problem.objective, problem.constraints
-    plain = replace(obj, robust="none")
-    if name == "min_ratio" and obj.min_ratio > 0:
-        cap = obj.max_ripple if obj.minimize == "-ratio" else LOOSE_RIPPLE
-        variant = replace(plain, minimize="-ratio", min_ratio=0.0, max_ripple=cap)
-        return (replace(problem, objective=variant), lambda m: m.ratio, "ratio", "largest",
-                obj.min_ratio, "-")
-    if name == "transmission_angle" and c.min_transmission_angle_deg > 0:
-        variant = replace(plain, minimize="-transmission_angle",
-                          max_ripple=obj.max_ripple if obj.minimize == "-ratio" else None)
-        return (replace(problem, objective=variant,
-                        constraints=replace(c, min_transmission_angle_deg=0.0)),
-                lambda m: m.min_angle_deg, "least transmission angle", "largest",
-                c.min_transmission_angle_deg, "deg")
-    if name == "max_ripple" and obj.max_ripple is not None:
-        variant = replace(plain, minimize="ripple", max_ripple=None)
-        return (replace(problem, objective=variant), lambda m: m.worst_ripple, "ripple δ",
-                "least", obj.max_ripple, "-")
-    spec = next((s for s in c.quantities if s.key == name and s.at is None), None)
+    """(the problem with constraint ``name`` dropped and its quantity pushed towards the
+    bound's side as the objective, the figure read off a
+    :class:`~optdesign.quantities.criteria.Measured` design, the figure in words, the side,
+    the file's bound, the unit), or None where the constraint bounds no quantity on one side
+    at its worst. Every other constraint is kept: one that came with the objective (the
+    ripple cap of the largest ratio) becomes a bound of its own."""
+    criterion = next((c for c in constraints_of(problem) if c.name == name), None)
+    spec = criterion.quantity_bound(problem) if criterion is not None else None
     if spec is None:
         return None
-    q = get_quantity(spec.name)
-    sides = [side for side in ("lower", "upper") if math.isfinite(getattr(spec, side))]
-    if len(sides) != 1 or sides[0] != q.natural_side():
+    sides = bounded_sides(spec)
+    if spec.at is not None or len(sides) != 1:
         return None
-    key = spec.name if q.worst == "max" else f"-{spec.name}"
-    if key not in objectives():
-        return None
-    others = tuple(s for s in c.quantities if s.key != spec.key)
-    bound = spec.upper if q.worst == "max" else spec.lower
-    return (replace(problem, objective=replace(plain, minimize=key),
-                    constraints=replace(c, quantities=others)),
-            lambda m: m.quantities[spec.key], spec.name,
-            "least" if q.worst == "max" else "largest", bound, q.unit)
+    side, = sides
+    quantity = get_quantity(spec.name)
+    variant = criterion.without(problem)
+    goal = f"-{spec.name}" if side == "lower" else spec.name
+    kept = () if goal == problem.objective.minimize else tuple(
+        c.quantity_bound(problem) for c in objective_of(problem).constraints(problem)
+        if c.name != name)
+    objective = replace(variant.objective, robust="none", minimize=goal)
+    if "max_ripple" in objectives()[goal].requires and objective.max_ripple is None:
+        objective = replace(objective, max_ripple=LOOSE_RIPPLE)
+    variant = replace(variant, objective=objective, constraints=replace(
+        variant.constraints, quantities=variant.constraints.quantities + tuple(
+            k for k in kept if k is not None)))
+    bound = spec.lower if side == "lower" else spec.upper
+    return (variant, lambda m: value_of(problem, spec, m.evaluation),
+            quantity.words or spec.name, "largest" if side == "lower" else "least", bound,
+            quantity.unit)
 
 
 #: relaxed solves tried at most: each costs a multi-start solve, and one that is infeasible

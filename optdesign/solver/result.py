@@ -138,12 +138,7 @@ class SolveResult(Tabular):
         if self.worst_case_delta is not None:
             return self.worst_case_delta
         minimize = self.objective.get("minimize", "ripple")
-        if minimize == "ripple":
-            return best.delta
-        if minimize == "-ratio":
-            return -best.ratio
-        name = minimize.lstrip("-")
-        value = best.quantities["values"][name]
+        value = best.quantities["values"][minimize.lstrip("-")]
         return -value if minimize.startswith("-") else value
 
     @property

@@ -17,6 +17,7 @@ from dataclasses import replace
 import numpy as np
 
 from optdesign.lifetime import beside
+from optdesign.quantities import get_quantity
 from optdesign.quantities.criteria import (LengthConstraint, Measured, TOL_ANGLE_DEG, TOL_RATIO,
                                            bound_excess, constraints_of)
 from optdesign.solver.nlp import Held, SCENARIO_SLOTS
@@ -87,7 +88,8 @@ def screened_cases(problem, values) -> tuple:
     for quantity, i, key in picks:
         part = box.part(corners[i])
         exact = exact_part(problem, part)
-        folded = math.inf if quantity == "ripple" else 0.0
+        # a part that does not assemble counts as the worst there is
+        folded = math.inf if get_quantity(quantity).worst == "max" else 0.0
         cases.append(WorstCase(quantity, exact[key] if exact["assembles"] else folded,
                                box.deviation(corners[i]),
                                {k: float(v) for k, v in part.items()}, 1, exact["assembles"],

@@ -77,6 +77,9 @@ def screen(problem, count: int, n_designs: int, extra: list[dict] = (),
         rows += list(spread(sobol.random_base2(m)[:n_designs], lower, upper))
     X = np.array(rows).reshape(len(rows), len(free))
     score, violation = _evaluate(problem, count, base, free, X, sampled)
+    if free and sampled is None and not np.any(violation <= 0):
+        X, score, violation = toward_feasible(problem, count, base, free, lower, upper,
+                                              X, score, violation)
     feasible = violation <= 0
     span = np.where(upper > lower, upper - lower, 1.0)
     unit = (X - lower) / span
@@ -111,6 +114,79 @@ def spread(unit: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray
     return out
 
 
+#: the feasibility stage: rounds of designs sampled around the least violating ones so far
+FEASIBILITY_ROUNDS = 8
+FEASIBILITY_BATCH = 256
+#: designs a round samples around, and the feasible designs that end the stage early
+ELITES = 16
+ENOUGH_FEASIBLE = 16
+#: least spread of a round's samples around an elite, in the lengths' logarithm (3 %)
+LEAST_SPREAD = 0.03
+#: the lengths relative to the regulated one (the crank) that the stage's first round tries:
+#: a linkage's figures depend on the ratios of its lengths alone (δ and the ratio are
+#: scale-free), and its links are seldom shorter than half the crank or longer than 40 times it
+RELATIVE = (0.5, 40.0)
+
+
+def toward_feasible(problem, count: int, base: dict, free: list, lower, upper, X, score,
+                    violation):
+    """The screened designs with a feasibility stage's added to them, where none of the
+    box's sample passes the filters (a box decades wider than the linkage, or a narrow
+    feasible set): a first round of lengths relative to the regulated one
+    (:data:`RELATIVE`), then rounds sampled log-normally around the :data:`ELITES` least
+    violating designs so far, their spread the elites' own, until :data:`ENOUGH_FEASIBLE`
+    designs pass (the constraint violation is lowered before the objective is looked at;
+    feasible designs rank first, by their score, Deb's rules). Deterministic: seeded by
+    ``solver.seed``."""
+    rng = np.random.default_rng(problem.solver.seed)
+    rows = [_relative_to_regulated(problem, base, free, lower, upper, rng)]
+    Xs, scores, violations = [X], [score], [violation]
+    log_lo, log_hi = np.log(lower), np.log(upper)
+    for _ in range(FEASIBILITY_ROUNDS + 1):
+        if rows[-1] is not None and len(rows[-1]):
+            s, v = _evaluate(problem, count, base, free, rows[-1])
+            Xs.append(rows[-1]), scores.append(s), violations.append(v)
+        every, v = np.vstack(Xs), np.concatenate(violations)
+        if np.sum(v <= 0) >= ENOUGH_FEASIBLE:
+            break
+        ranked = np.lexsort((np.where(v <= 0, np.concatenate(scores), v), ~(v <= 0)))
+        elites = np.log(every[ranked[:ELITES]][np.isfinite(v[ranked[:ELITES]])])
+        if not len(elites):          # nothing assembles yet: the box again, in its logarithm
+            rows.append(np.exp(rng.uniform(log_lo, log_hi, (FEASIBILITY_BATCH, len(free)))))
+            continue
+        spread_ = np.maximum(elites.std(axis=0), LEAST_SPREAD)
+        centres = elites[rng.integers(len(elites), size=FEASIBILITY_BATCH)]
+        z = centres + rng.normal(0.0, 1.0, centres.shape) * spread_
+        rows.append(np.exp(np.clip(z, log_lo, log_hi)))
+    return np.vstack(Xs), np.concatenate(scores), np.concatenate(violations)
+
+
+def _relative_to_regulated(problem, base: dict, free: list, lower, upper, rng):
+    """:data:`FEASIBILITY_BATCH` designs whose free lengths are log-uniform multiples of
+    the regulated length within :data:`RELATIVE` (and the box); the regulated length itself
+    log-uniform in its bounds where it is free. None where the mechanism regulates no length
+    among its lengths."""
+    regulated = problem.model.regulating_variable
+    if regulated not in base:
+        return None
+    n = FEASIBILITY_BATCH
+    if regulated in free:
+        j = free.index(regulated)
+        scale = np.exp(rng.uniform(np.log(lower[j]), np.log(upper[j]), n))
+    else:
+        scale = np.full(n, float(base[regulated]))
+    out = np.empty((n, len(free)))
+    for j, name in enumerate(free):
+        if name == regulated:
+            out[:, j] = scale
+            continue
+        lo = np.maximum(lower[j], RELATIVE[0] * scale)
+        hi = np.minimum(upper[j], RELATIVE[1] * scale)
+        lo, hi = np.where(lo < hi, lo, lower[j]), np.where(lo < hi, hi, upper[j])
+        out[:, j] = np.exp(rng.uniform(np.log(lo), np.log(hi)))
+    return out
+
+
 def _evaluate(problem, count, base, free, X, sampled: dict | None = None
               ) -> tuple[np.ndarray, np.ndarray]:
     """(score, violation) of every design row of X: sampled objective, and the largest
@@ -130,7 +206,7 @@ def _evaluate(problem, count, base, free, X, sampled: dict | None = None
                                               ANGLE_SLACK_DEG, 0.0))),
                     math.sqrt(1.0 - c.assembly_margin))
     violation = np.full(S, -np.inf)
-    ripples, ratio, peaks, angles = [], None, {}, {}
+    ripples, ratio, envelope = [], None, {}
     with np.errstate(all="ignore"):
         for e in eccentricities_of(problem):
             P = np.vstack([lengths[k] * (e if k == model.regulating_variable else 1.0)
@@ -141,20 +217,21 @@ def _evaluate(problem, count, base, free, X, sampled: dict | None = None
             env = np.maximum(f.max(axis=0), 0.0)
             hi, mean = env.max(axis=1), env.mean(axis=1)
             lo = np.minimum(env.min(axis=1), _crossings(f).min(axis=1))
+            delta = ripple_of(hi, lo, mean, problem.objective.ripple)
             if e in problem.eccentricities:
-                ripples.append(ripple_of(hi, lo, mean, problem.objective.ripple))
-                peaks[e] = hi * e * problem.input_speed
+                ripples.append(delta)
             if e == 1.0:
                 ratio, peak = mean, hi
             worst_cos = np.abs(cos_mu).reshape(n, S, N).max(axis=(0, 2))
-            if e in problem.eccentricities:
-                angles[e] = np.degrees(np.arccos(np.clip(worst_cos, 0.0, 1.0)))
+            envelope[e] = {"ratio": mean * e, "ripple": delta,
+                           "peak_speed": hi * e * problem.input_speed,
+                           "transmission_angle":
+                               np.degrees(np.arccos(np.clip(worst_cos, 0.0, 1.0)))}
             bad = ~np.isfinite(worst_cos) | ~np.all(np.isfinite(f), axis=(0, 2)) | \
                 (worst_cos > 1.0)
             violation = np.maximum(violation, np.where(bad, np.inf, worst_cos - cos_limit))
         q = _Sampled(lengths, ratio, np.max(ripples, axis=0), peak * problem.input_speed,
-                     sampled_quantities(problem, count, lengths, ripples, peaks, ratio,
-                                        angles))
+                     sampled_quantities(problem, count, lengths, envelope))
         for criterion in constraints_of(problem):
             if isinstance(criterion, (TransmissionAngle, SectionConstraint)):
                 continue        # the angle is filtered above, with slack; sections at the check
@@ -198,39 +275,44 @@ class _Sampled:
     quantities: dict = field(default_factory=dict)
 
 
-def sampled_quantities(problem, count: int, lengths: dict, ripples: list, peaks: dict,
-                       ratio: np.ndarray, angles: dict | None = None) -> dict:
-    """Each quantity spec's sampled value per screened design: a turn quantity's maxima on
-    the screening's grid (:meth:`~optdesign.quantities.base.TurnQuantity.sampled`), the
-    envelope's sampled peak, ripple, ratio and least transmission angle (``angles``, deg per
-    eccentricity); the worst over the spec's eccentricities."""
-    model = problem.model
-    listed = list(problem.eccentricities)
-    options = tuple(sorted(problem.options.items()))
+@dataclass
+class SampledView:
+    """What the screening sampled of its designs, for the quantities' sampled forms
+    (:meth:`~optdesign.quantities.base.Quantity.sampled_value`): the envelope's figures per
+    eccentricity (``ratio``, ``ripple``, ``peak_speed``, ``transmission_angle``, arrays over
+    the designs) and a turn quantity's per-angle function sampled on the same grid."""
+
+    problem: object
+    count: int
+    lengths: dict
+    envelope: dict
+    input_speed: float
+
+    def turn(self, quantity, eccentricity: float) -> np.ndarray:
+        """g of a turn quantity at (components, designs, angles) on the screening's grid."""
+        model = self.problem.model
+        options = tuple(sorted(self.problem.options.items()))
+        g, _ = quantity.function(model, self.count, options)
+        S = len(next(iter(self.lengths.values())))
+        N = max(SCREEN_SAMPLES, SAMPLES_PER_CURVE * self.count)
+        phi = np.tile(np.linspace(0.0, 2 * np.pi, N, endpoint=False), S)[None, :]
+        P = np.vstack([self.lengths[k] * (eccentricity if k == model.regulating_variable
+                                          else 1.0) for k in model.lengths])
+        grid = _sample_lanes(g, phi, np.repeat(P, N, axis=1))
+        return grid.reshape(grid.shape[0], S, N)
+
+
+def sampled_quantities(problem, count: int, lengths: dict, envelope: dict) -> dict:
+    """Each quantity spec's sampled value per screened design (its sampled form, at its
+    eccentricity or the worst over the listed ones). ``envelope``: the sampled envelope's
+    figures by eccentricity (:class:`SampledView`)."""
+    view = SampledView(problem, count, lengths, envelope, problem.input_speed)
     out = {}
     for spec in quantity_specs(problem):
         quantity = get_quantity(spec.name)
-        eccs = [spec.at] if spec.at is not None else listed
-        if spec.name == "ratio":
-            values = [ratio]
-        elif spec.name == "ripple":
-            values = [ripples[listed.index(e)] for e in eccs]
-        elif spec.name == "peak_speed":
-            values = [peaks[e] for e in eccs]
-        elif spec.name == "transmission_angle":
-            values = [angles[e] for e in eccs]
-        else:
-            g, _ = quantity.function(model, count, options)
-            S = len(next(iter(lengths.values())))
-            N = max(SCREEN_SAMPLES, SAMPLES_PER_CURVE * count)
-            phi = np.tile(np.linspace(0.0, 2 * np.pi, N, endpoint=False), S)[None, :]
-            values = []
-            for e in eccs:
-                P = np.vstack([lengths[k] * (e if k == model.regulating_variable else 1.0)
-                               for k in model.lengths])
-                grid = _sample_lanes(g, phi, np.repeat(P, N, axis=1))
-                values.append(quantity.sampled(grid.reshape(grid.shape[0], S, N),
-                                               problem.input_speed))
+        e = spec.at if spec.at is not None else quantity.at
+        values = [quantity.sampled_value(view, x)
+                  for x in ([e] if e is not None else problem.eccentricities)]
         out[spec.key] = np.max(values, axis=0) if quantity.worst == "max" else \
             np.min(values, axis=0)
     return out

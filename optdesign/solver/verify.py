@@ -152,16 +152,15 @@ def start_guess(nlp, ver: Verification) -> dict:
         pad = np.full(nlp.slots - handovers.size, handovers[0] if handovers.size else 0.0)
         guess[f"phi_handover_{tag}"] = np.concatenate([handovers, pad])
         for name in nlp.turn:
-            maxima = get_quantity(name).maxima(design, e, x.sampled)
-            guess[f"phi_q_{name}_{tag}"] = maxima.angles
-            guess[f"constant_{name}_{tag}"] = maxima.constant
+            for part, value in get_quantity(name).start_angles(design, e, x.sampled).items():
+                guess[f"{'phi_q' if part == 'angles' else part}_{name}_{tag}"] = value
+    variables = {block.name for block in nlp.layout.x}
     for spec in nlp.specs:
-        if spec.name not in ("ratio", "ripple"):
-            value = ver.measured.quantities[spec.key]
-            if spec.name == "transmission_angle":       # the NLP's figure is cos²μ_min
-                value = math.cos(math.radians(value)) ** 2
-            guess[f"quantity_{spec.key}"] = [value]
-            for j in range(nlp.n_scenarios):     # a part's own value: near the nominal's
-                guess[f"quantity_{spec.key}_{scenario_tag(j)}"] = \
-                    guess[f"quantity_{spec.key}"]
+        if f"quantity_{spec.key}" not in variables:
+            continue                    # the NLP reads the figure itself: nothing to start
+        # the epigraph in the NLP's figure (cos²μ of the least angle)
+        value = get_quantity(spec.name).to_figure(ver.measured.quantities[spec.key])
+        guess[f"quantity_{spec.key}"] = [value]
+        for j in range(nlp.n_scenarios):     # a part's own value: near the nominal's
+            guess[f"quantity_{spec.key}_{scenario_tag(j)}"] = [value]
     return guess

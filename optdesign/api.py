@@ -20,6 +20,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from optdesign.errors import ProblemError, shown
+from optdesign.limits import COUNTS
 from optdesign.problem.loader import (Options, Problem, Reader, load_problem as _load_file,
                                       problem_from_dict)
 
@@ -115,7 +116,7 @@ def pareto(problem, out=None, points: int | None = None, workers: int | None = 1
     if points is not None:
         points = DECLARATION.key("points").read(r, points, "points")
     if workers is not None:
-        workers = r.integer(workers, "workers", 1, 256)
+        workers = r.integer(workers, "workers", 1, COUNTS["workers"])
     if not isinstance(resume, bool):
         raise TypeError(f"resume must be true or false (got {type(resume).__name__})")
     if resume and out is None:

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import sys
 import time
 from dataclasses import dataclass, field
@@ -32,6 +31,7 @@ from optdesign.atlas.worker import solve_cell
 from optdesign.errors import OptDesignError, ProblemError
 from optdesign.fronts.store import Journal
 from optdesign.lifetime import raise_if_terminated
+from optdesign.limits import local_processes
 from optdesign.solver import verify
 
 #: a resumed record's δ and ratio must match its design's exact figures to this (relative)
@@ -271,7 +271,7 @@ def _n_workers(ex, workers) -> int:
             return max(1, len(client.scheduler_info()["workers"]))
         except (OSError, KeyError, TypeError):
             return 2
-    return workers or os.cpu_count() or 1
+    return local_processes(workers)
 
 
 def _line_of(journal: Journal, rec: dict) -> str:

@@ -34,6 +34,7 @@ from optdesign.fronts.front import ParetoResult, evaluate, frame
 from optdesign.fronts.section import DEFAULT_POINTS, ParetoSection
 from optdesign.fronts.store import Journal
 from optdesign.lifetime import die_with_parent, raise_if_terminated, signals_held
+from optdesign.limits import local_processes
 from optdesign.quantities.criteria import result_columns
 from optdesign.solver import verify
 
@@ -147,7 +148,7 @@ def _is_terminal(stream) -> bool:
 def _executor(workers: int | None, scheduler):
     if scheduler is not None:
         return _Dask(scheduler)
-    workers = workers or os.cpu_count() or 1
+    workers = local_processes(workers)
     return _Inline() if workers == 1 else _Pool(workers)
 
 
@@ -225,7 +226,7 @@ class _Sweep:
         _reverify(self.problem, self.done, self.journal)
         self.n_resumed = len(self.done)
         self.ex = _executor(workers, scheduler)
-        self.n_workers = workers or os.cpu_count() or 1
+        self.n_workers = local_processes(workers)
         self.n_chains = max(2, -(-self.n_workers // max(1, len(self.counts))))
         from tqdm import tqdm
         refined = sum(1 for r in self.done.values() if (r.get("round") or 0) >= 1)

@@ -117,25 +117,34 @@ class Journal:
                                    f"only as a regular file in the output folder") from None
             raise
         try:
-            if not stat.S_ISREG(os.fstat(fd).st_mode):
+            st = os.fstat(fd)
+            if not stat.S_ISREG(st.st_mode):
                 raise ProblemError(f"{self.path}: is not a regular file; the journal is "
                                    f"written only as a regular file in the output folder")
+            if st.st_nlink > 1:
+                raise ProblemError(f"{self.path}: has another name (a hard link); the "
+                                   f"journal is written only as a file of the output folder's "
+                                   f"own")
             os.write(fd, line.encode("utf-8"))      # one write per line: whole or nothing
             os.fsync(fd)
         finally:
             os.close(fd)
 
     def _require_regular(self) -> None:
-        """Refuse a journal that is a link or anything but a regular file: what the run
-        reads and appends to stays inside the output folder."""
+        """Refuse a journal that is a link, a hard link (a file with another name, maybe
+        outside the output folder, that an append would change) or anything but a regular
+        file: what the run reads and appends to stays inside the output folder."""
         try:
-            mode = os.lstat(self.path).st_mode
+            st = os.lstat(self.path)
         except FileNotFoundError:
             return
-        if not stat.S_ISREG(mode):
-            what = "a link" if stat.S_ISLNK(mode) else "not a regular file"
+        if not stat.S_ISREG(st.st_mode) or st.st_nlink > 1:
+            what = ("a link" if stat.S_ISLNK(st.st_mode) else "not a regular file"
+                    if not stat.S_ISREG(st.st_mode) else
+                    f"a file with {st.st_nlink} names (a hard link)")
             raise ProblemError(f"{self.path}: is {what}; a journal to resume must be a "
-                               f"regular file in the output folder (it is left as it is)")
+                               f"regular file of the output folder's own (it is left as it "
+                               f"is)")
 
 
 #: a record's fields and their types (None allowed where a point has no verified design)

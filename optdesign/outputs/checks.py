@@ -11,6 +11,7 @@ import tempfile
 from pathlib import Path
 
 from optdesign.errors import UsageError, shown
+from optdesign.outputs.links import followed
 
 #: where the commands write when no ``--out`` is given
 RESULTS = Path("results")
@@ -54,7 +55,9 @@ def resolve_out(out: str | Path | None, name: str, suffix: str = "") -> tuple[Pa
 
     ``out`` is the ``--out`` argument (None: :func:`default_out` of ``name``). An empty name
     is refused (it would mean the current folder); ``..`` is resolved as the kernel resolves
-    it, so ``a/b/../../x`` is ``x`` and creates no ``a/b``. Raises :class:`UsageError`.
+    it, so ``a/b/../../x`` is ``x`` and creates no ``a/b``. A link on the way that the
+    kernel's protected-symlinks rule would not follow (another user's, in a shared sticky
+    folder: :mod:`optdesign.outputs.links`) is refused. Raises :class:`UsageError`.
     """
     label = f"--out {shown(str(out))}" if out is not None else \
         f"{default_out(name, suffix)} (the default output folder; give --out)"
@@ -62,7 +65,7 @@ def resolve_out(out: str | Path | None, name: str, suffix: str = "") -> tuple[Pa
     if not text.strip() or "\0" in text:
         raise UsageError(f"{label}: is not a folder name")
     path = Path(text)
-    real = os.path.realpath(path)
+    real = followed(path, label)
     tree = system_tree(real)
     if tree:
         raise UsageError(f"{label}: is under {tree}, not a place for results")

@@ -147,6 +147,26 @@ class Journal:
                                f"is)")
 
 
+#: the statuses a record of a solve may hold: ``optimal`` (a verified feasible design, the one
+#: status with ``feasible`` true), ``infeasible``, ``failed``
+STATUSES = ("optimal", "infeasible", "failed")
+
+
+def to_solve_again(records: dict) -> list:
+    """The keys of the resumed ``records`` (by key) to solve again rather than keep, removed
+    from ``records``: every one but a feasible ``optimal`` record. A feasible design can be
+    checked (evaluated exactly again, by the caller); a verdict that no design was found
+    cannot be checked without the solve, and a status that is not one of :data:`STATUSES`,
+    or that disagrees with ``feasible`` (``"feasible": false, "status": "optimal"``), is no
+    verdict at all. Solving them again keeps a forged or foreign record out of a front or an
+    atlas, and gives the result an uninterrupted run gives."""
+    keys = [k for k, r in records.items()
+            if not (r["feasible"] is True and r["status"] == "optimal")]
+    for k in keys:
+        del records[k]
+    return keys
+
+
 #: a record's fields and their types (None allowed where a point has no verified design)
 FIELDS = {"count": (int,), "kind": (str,), "status": (str,), "feasible": (bool,),
           "design": (dict,), "delta": (int, float, type(None)),

@@ -32,7 +32,7 @@ from optdesign.fronts.cluster import connect
 from optdesign.fronts.files import write_front
 from optdesign.fronts.front import ParetoResult, evaluate, frame
 from optdesign.fronts.section import DEFAULT_POINTS, ParetoSection
-from optdesign.fronts.store import Journal
+from optdesign.fronts.store import Journal, to_solve_again
 from optdesign.lifetime import die_with_parent, raise_if_terminated, signals_held
 from optdesign.limits import local_processes
 from optdesign.quantities.criteria import result_columns
@@ -438,13 +438,14 @@ RESUME_REL = 1e-9
 
 
 def _reverify(problem, done: dict, journal: Journal) -> None:
-    """Every resumed feasible record's design evaluated exactly again before it enters a front:
-    its δ, ratio and least transmission angle must be the record's, and the design must meet
-    the problem's constraints. An edited or foreign record is refused (exit 2) with its line;
+    """Every resumed record checked before it enters a front: one that is not a feasible
+    optimum is solved again (:func:`~optdesign.fronts.store.to_solve_again`: removed from
+    ``done``), and every feasible record's design is evaluated exactly again: its δ, ratio
+    and least transmission angle must be the record's, and the design must meet the
+    problem's constraints. An edited or foreign record is refused (exit 2) with its line;
     the journal is left as it is."""
+    to_solve_again(done)
     for key, rec in done.items():
-        if not rec.get("feasible"):
-            continue
         where = f"{journal.path}: line {journal.line_of.get(key, '?')}"
         design = dict(rec["design"])
         design.setdefault(problem.model.count_variable, rec["count"])

@@ -242,6 +242,10 @@ def _read_values(r: Reader, value, key: str, name: str, model) -> tuple:
     step = r.number(entry["step"], f"{key}.step")
     if step <= 0:
         raise r.error(f"{key}.step", f"must be positive (got {step:g})")
+    if name == "phases" and step != int(step):
+        # a count steps by whole numbers: 3, 3.5, 4 would be rounded into repeated cells
+        raise r.error(f"{key}.step", f"must be a whole number: the count takes whole values "
+                                     f"(got {step:g})")
     if upper < lower:
         raise r.error(f"{key}.upper", f"must not be below lower (got {upper:g} < {lower:g})")
     n = int(math.floor((upper - lower) / step + 1e-9)) + 1

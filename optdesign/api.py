@@ -20,6 +20,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from optdesign.errors import ProblemError, shown
+from optdesign.limits import COUNTS
 from optdesign.problem.loader import (Options, Problem, Reader, load_problem as _load_file,
                                       problem_from_dict)
 
@@ -115,20 +116,57 @@ def pareto(problem, out=None, points: int | None = None, workers: int | None = 1
     if points is not None:
         points = DECLARATION.key("points").read(r, points, "points")
     if workers is not None:
-        workers = r.integer(workers, "workers", 1, 256)
-    if not isinstance(resume, bool):
-        raise TypeError(f"resume must be true or false (got {type(resume).__name__})")
+        workers = r.integer(workers, "workers", 1, COUNTS["workers"])
+    for name, flag in (("resume", resume), ("progress", progress)):
+        if not isinstance(flag, bool):
+            raise TypeError(f"{name} must be true or false (got {type(flag).__name__})")
     if resume and out is None:
         raise ProblemError(f"{problem.source}: resume=True needs out, the folder of the "
                            f"journal to continue")
     if out is not None and not isinstance(out, (str, Path)):
         raise TypeError(f"out must be a path (got {type(out).__name__})")
+    scheduler = _scheduler(scheduler)
     if out is not None:
-        return sweep(problem, out, points=points, workers=workers, resume=resume,
-                     scheduler=scheduler, progress=progress)
+        from optdesign.outputs.checks import prepare_out
+        from optdesign.outputs.folder import OutputFolder
+
+        # the command's checks and lock: a folder that cannot work (a file, /dev/null, a
+        # planted link) is a UsageError before any work, and one run writes there at a time
+        out = prepare_out(out, problem.name, "_pareto", files=FRONT_FILES, option="out")
+        with OutputFolder(out, FRONT_FILES):
+            return sweep(problem, out, points=points, workers=workers, resume=resume,
+                         scheduler=scheduler, progress=progress)
     with tempfile.TemporaryDirectory(prefix="optdesign-pareto-") as tmp:
         return sweep(problem, tmp, points=points, workers=workers, scheduler=scheduler,
                      progress=progress)
+
+
+#: the files pareto(out=...) writes in its folder: the journal and the front's tables
+FRONT_FILES = ("points.jsonl", "pareto.csv", "pareto.json")
+
+
+def _scheduler(scheduler):
+    """``scheduler`` when it can name a Dask cluster: None, an address (checked when the
+    sweep connects, :func:`optdesign.fronts.cluster.connect`) or a ``distributed.Client``."""
+    if scheduler is None or isinstance(scheduler, str):
+        return scheduler
+    try:
+        from distributed import Client
+    except ImportError:
+        Client = ()
+    if not isinstance(scheduler, Client):
+        raise TypeError(f"scheduler must be an address such as 'tcp://HOST:8786' or a "
+                        f"distributed.Client (got {type(scheduler).__name__})")
+    return scheduler
+
+
+def _ax(ax):
+    """``ax`` when a plot can draw into it: None (a new figure) or a matplotlib Axes."""
+    if ax is not None:
+        from matplotlib.axes import Axes
+        if not isinstance(ax, Axes):
+            raise TypeError(f"ax must be a matplotlib Axes or None (got {type(ax).__name__})")
+    return ax
 
 
 def plot_speeds(problem, design: Mapping | None = None, eccentricity: float = 1.0, ax=None,
@@ -140,7 +178,8 @@ def plot_speeds(problem, design: Mapping | None = None, eccentricity: float = 1.
 
     problem = load_problem(problem)
     return _plot(Design.from_problem(problem, _design(problem, design)), problem.stroke,
-                 problem.input_speed, _eccentricity(problem, eccentricity), ax=ax, title=title)
+                 problem.input_speed, _eccentricity(problem, eccentricity), ax=_ax(ax),
+                 title=title)
 
 
 def plot_mechanism(problem, design: Mapping | None = None, angles_deg=(0, 90, 180, 270),
@@ -170,4 +209,4 @@ def plot_front(front, ax=None, title: str | None = None):
                         f"{type(front).__name__})")
     points = front.points.copy()
     points.attrs["knee"] = front.indicators.get("knee")
-    return plot_fronts(points, ax=ax, title=title, axis=front.axis)
+    return plot_fronts(points, ax=_ax(ax), title=title, axis=front.axis)

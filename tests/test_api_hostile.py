@@ -155,3 +155,29 @@ def test_the_45_kinds_of_call_of_the_audit():
     for call, message in cases:
         with pytest.raises(ProblemError, match=message.replace(".", r"\.")):
             call()
+
+
+def test_arguments_that_reached_deep_inside_are_refused_at_the_door(tmp_path):
+    """A wrong kind of scheduler or axes, and an out that cannot be a folder, each a one-line
+    error naming the argument, never an AttributeError or FileExistsError from inside."""
+    from optdesign.errors import UsageError
+
+    a_file = tmp_path / "a_file"
+    a_file.write_text("mine")
+    cases = [
+        (lambda: api.pareto(FRONT, scheduler=123), TypeError,
+         "scheduler must be an address such as 'tcp://HOST:8786' or a distributed.Client "
+         "(got int)"),
+        (lambda: api.pareto(FRONT, out="/dev/null"), UsageError,
+         "out '/dev/null': is under /dev, not a place for results"),
+        (lambda: api.pareto(FRONT, out=a_file), UsageError, "': exists and is not a folder"),
+        (lambda: api.pareto(FRONT, progress="yes"), TypeError,
+         "progress must be true or false (got str)"),
+        (lambda: api.plot_speeds(PAPER, ax="left"), TypeError,
+         "ax must be a matplotlib Axes or None (got str)"),
+    ]
+    for call, kind, message in cases:
+        with pytest.raises(kind) as info:
+            call()
+        assert message in str(info.value) and "\n" not in str(info.value)
+    assert a_file.read_text() == "mine"

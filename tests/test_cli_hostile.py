@@ -316,6 +316,12 @@ def test_ripple_does_not_depend_on_the_input_speed(write_problem, capsys, file):
      "--crosscheck must be at most 100000000"),
     (["simulate", DYNAMICS_FILE, "--cycles", "1000000000"], "--cycles must be at most 100000"),
     (["pareto", FREE_FILE, "--points", "100000"], "argument --points: must be at most 1000"),
+    (["pareto", FREE_FILE, "--workers", "100000"], "argument --workers: must be at most 256"),
+    (["atlas", ROOT / "problems" / "atlas_fourbar.yaml", "--workers", "100000"],
+     "argument --workers: must be at most 256"),
+    (["tolerance", ROOT / "problems" / "sharkov2022_disc_tolerance.yaml", "--samples",
+      "10000001"], "--samples must lie in [1, 10000000]"),
+    (["animate", PAPER_FILE, "--frames", "721"], "--frames must lie in [8, 720]"),
 ])
 def test_command_line_counts_have_limits(capsys, argv, message):
     try:
@@ -325,10 +331,29 @@ def test_command_line_counts_have_limits(capsys, argv, message):
     assert code == 2 and message in one_line(err)
 
 
-def test_points_limit_matches_the_section():
-    from optdesign.commands.pareto import MAX_POINTS
-    from optdesign.fronts.section import MAX_POINTS as SECTION_MAX_POINTS
-    assert MAX_POINTS == SECTION_MAX_POINTS
+def test_a_count_has_one_limit_in_the_file_the_flag_and_the_api(write_problem, capsys):
+    """The file's key, the flag and the API's argument take their bound from one table."""
+    from optdesign import api
+    from optdesign.commands import animate, bench, curves, pareto, tolerance
+    from optdesign.dynamics.section import MAX_CYCLES
+    from optdesign.errors import ProblemError
+    from optdesign.fronts.section import DECLARATION as PARETO
+    from optdesign.limits import COUNTS
+    from optdesign.problem.loader import SOLVER_INTEGERS
+    from optdesign.tolerance.section import DECLARATION as TOLERANCES
+
+    assert (pareto.MAX_POINTS, PARETO.key("points").upper) == (COUNTS["points"],) * 2
+    assert (tolerance.MAX_SAMPLES, TOLERANCES.key("samples").upper) == (COUNTS["parts"],) * 2
+    assert (MAX_CYCLES, animate.MAX_FRAMES, curves.MAX_SAMPLES, bench.MAX_CROSSCHECK) == \
+        (COUNTS["cycles"], COUNTS["frames"], COUNTS["curve_samples"], COUNTS["crosscheck"])
+    assert {k: hi for k, (_, hi) in SOLVER_INTEGERS.items() if k != "seed"} == {
+        k: COUNTS[{"samples": "nlp_samples"}.get(k, k)] for k in SOLVER_INTEGERS if k != "seed"}
+    path = write_problem(paper_text("min_ratio: 0.0", "min_ratio: 0.0\nsolver: {workers: 257}"))
+    code, _, err = run(capsys, "analyze", path)
+    assert code == 2 and "solver.workers must be at most 256" in one_line(err)
+    for kind in ("workers", "points"):
+        with pytest.raises(ProblemError, match=f"{kind} must be at most {COUNTS[kind]}"):
+            api.pareto(FREE_FILE, **{kind: COUNTS[kind] + 1})
 
 
 # --------------------------------------------------------------------------- JSON

@@ -96,14 +96,31 @@ def test_a_point_of_a_front_or_its_knee(solved, tmp_path):
     (["--design", "{front}"], "a front holds many designs: pick one with --point K or --knee"),
     (["--design", "{front}", "--point", "2", "--knee"], "--point and --knee each pick a point"),
     (["--design", "{free}"], "design.l0 is not fixed"),
-    (["--design", "{other}"], "is a design of 'slotted_lever', the problem's mechanism is fourbar_converter"),
+    (["--design", "{other}"], "its design is a slotted_lever design; sharkov2022_disc.yaml "
+                              "is a fourbar_converter"),
+    (["--design", "{reducer}", "--point", "1"], "point 1 is a pulse_reducer design; "
+                                                "sharkov2022_disc.yaml is a fourbar_converter"),
+    (["--design", "{part}", "--point", "1"], "point 1 has no l3 (a fourbar_converter design "
+                                             "names every length"),
+    (["--design", "{short}"], "its design has no l0 (a fourbar_converter design names every "
+                              "length: l0, l1, l2, l2_prime, l3; none is taken from "
+                              "sharkov2022_disc.yaml)"),
 ])
 def test_a_design_that_cannot_be_taken_is_one_line_and_exit_2(solved, tmp_path, capsys,
                                                                argv, message):
     _, result = solved
     files = {"front": _front(tmp_path, result), "free": DISC,
-             "other": tmp_path / "other.json"}
+             "other": tmp_path / "other.json", "reducer": tmp_path / "reducer.csv",
+             "part": tmp_path / "part.csv", "short": tmp_path / "short.json"}
     files["other"].write_text(json.dumps({"mechanism": "slotted_lever", "design": {}}))
+    # a pulse reducer's front (its lengths, its count's name and the generic count), and a
+    # four-bar front row and a result.json each missing lengths: refused, not completed
+    files["reducer"].write_text("freewheels,delta,ratio,r1,a,R1,status,count\n"
+                                "2,0.001,0.99,20,100,50,optimal,2\n")
+    files["part"].write_text("phases,delta,ratio,l0,l1,l2,l2_prime,status\n"
+                             "6,0.3,0.5,225,20,225,100,optimal\n")
+    files["short"].write_text(json.dumps({"status": "optimal",
+                                          "design": {"l3": 56, "phases": 6}}))
     argv = [a.format(**files) for a in argv]
     assert main(["analyze", str(DISC), *argv]) == 2
     err = capsys.readouterr().err

@@ -183,6 +183,132 @@ def test_the_folder_keeps_its_mode(tmp_path, monkeypatch, atomic_exchange, users
     assert (out / "result.json").read_text() == "two result.json"
 
 
+#: another user's cases need a link or a folder of another uid: only root can make one here
+as_root = pytest.mark.skipif(os.geteuid() != 0, reason="planting another user's link or "
+                             "folder needs root (os.lchown/os.chown to another uid)")
+NOBODY = 65534
+
+
+def _shared(tmp_path, name="shared"):
+    """A sticky, world-writable folder, as /tmp is."""
+    shared = tmp_path / name
+    shared.mkdir()
+    os.chmod(shared, 0o1777)
+    return shared
+
+
+def _plant(link, target, uid=NOBODY):
+    link.symlink_to(target)
+    os.lchown(link, uid, uid)
+
+
+@as_root
+@pytest.mark.parametrize("where", ["the folder's own name", "results, which the run makes"])
+def test_another_users_link_in_a_shared_folder_is_not_followed(tmp_path, monkeypatch, capsys,
+                                                               victim, where):
+    """The kernel's protected-symlinks rule, whatever the machine's setting: a stranger's link
+    in a sticky world-writable folder leads nowhere; nothing of the victim's is touched."""
+    shared = _shared(tmp_path)
+    monkeypatch.chdir(shared)
+    if where == "results, which the run makes":
+        _plant(shared / "results", victim.parent)
+        planted = shared / "results"
+    else:
+        os.mkdir(shared / "results", 0o1777)
+        os.chmod(shared / "results", 0o1777)
+        _plant(shared / "results" / "sharkov2022_disc", victim.parent)
+        planted = shared / "results" / "sharkov2022_disc"
+    before = sorted(victim.parent.iterdir())
+    assert main(["curves", str(ROOT / "problems" / "sharkov2022_disc.yaml")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{planted} is a link of another user (uid {NOBODY})" in err
+    assert sorted(victim.parent.iterdir()) == before and victim.read_text() == SECRET
+    with pytest.raises(UsageError, match="is a link of another user"):
+        OutputFolder(shared / "results" / "sharkov2022_disc", SOLVE_FILES)
+
+
+@as_root
+def test_links_the_kernel_would_follow_are_followed(tmp_path, monkeypatch):
+    """One's own link in a shared folder, and a stranger's in a folder that is not shared
+    (only its owner could have put it there), lead where they point."""
+    from optdesign.outputs.links import followed
+    shared = _shared(tmp_path)
+    target = tmp_path / "mine"
+    target.mkdir()
+    (shared / "own").symlink_to(target)
+    assert resolve_out(str(shared / "own"), "p")[0] == shared / "own"
+    assert prepare_out(str(shared / "own" / "x"), "p") == shared / "own" / "x"
+    assert (target / "x").is_dir()
+    private = tmp_path / "private"
+    private.mkdir()
+    _plant(private / "theirs", target)
+    assert followed(private / "theirs", "--out") == str(target)
+    _plant(shared / "owners", target, uid=NOBODY)     # the shared folder's owner's link
+    os.chown(shared, NOBODY, NOBODY)
+    assert followed(shared / "owners", "--out") == str(target)
+
+
+def _xattrs_supported(path) -> bool:
+    try:
+        os.setxattr(path, "user.probe", b"1")
+        os.removexattr(path, "user.probe")
+        return True
+    except OSError:
+        return False
+
+
+@as_root
+@pytest.mark.parametrize("atomic_exchange", [True, False])
+def test_a_replaced_folder_keeps_its_owner_group_mode_and_attributes(tmp_path, monkeypatch,
+                                                                      atomic_exchange):
+    """A team's folder (another owner, group, setgid 2770, an extended attribute) comes back
+    as it was, and the set's files take the folder's group as a setgid folder gives it."""
+    if not atomic_exchange:
+        monkeypatch.setattr(output_dir, "_exchange", lambda a, b: False)
+    out = tmp_path / "team"
+    out.mkdir()
+    os.chown(out, NOBODY, NOBODY)
+    os.chmod(out, 0o2770)
+    xattrs = _xattrs_supported(out)
+    if xattrs:
+        os.setxattr(out, "user.team", b"blue")
+    for text in ("one", "two"):
+        with OutputFolder(out, SOLVE_FILES) as folder:
+            folder.replace_with(_write_set(text))
+        st = out.stat()
+        assert (st.st_uid, st.st_gid, stat.S_IMODE(st.st_mode)) == (NOBODY, NOBODY, 0o2770)
+        assert (out / "result.json").stat().st_gid == NOBODY
+        if xattrs:
+            assert os.getxattr(out, "user.team") == b"blue"
+    assert (out / "result.json").read_text() == "two result.json"
+
+
+def test_a_folder_whose_attributes_cannot_be_given_is_written_in_place(tmp_path,
+                                                                       monkeypatch):
+    """Where the sibling cannot take the folder's attributes (another user's folder for a
+    runner who is not root), the set goes into the folder itself, which keeps its own."""
+    from optdesign.outputs.attributes import take_on
+    out = tmp_path / "theirs"
+    out.mkdir()
+    staging = tmp_path / "staging"
+    staging.mkdir()
+    if os.geteuid() == 0:                   # a folder of another owner, chown refused
+        os.chown(out, NOBODY, NOBODY)
+
+        def refused(*args):
+            raise PermissionError(1, "Operation not permitted")
+        monkeypatch.setattr("optdesign.outputs.attributes.os.chown", refused)
+        assert not take_on(out, staging)
+        monkeypatch.undo()
+    monkeypatch.setattr(output_dir, "take_on", lambda folder, staging: False)
+    inode = out.stat().st_ino
+    with OutputFolder(out, SOLVE_FILES) as folder:
+        folder.replace_with(_write_set("one"))
+    assert out.stat().st_ino == inode                       # the same folder, written into
+    assert (out / "result.json").read_text() == "one result.json"
+    assert _siblings(out) == []
+
+
 def test_an_empty_out_is_refused_and_dot_dots_create_nothing_on_the_way(tmp_path,
                                                                          monkeypatch):
     monkeypatch.chdir(tmp_path)
@@ -224,6 +350,22 @@ def test_resume_refuses_a_journal_that_is_a_link(tmp_path, small_problem, victim
     assert "points.jsonl" in err and "link" in err and err.count("\n") == 1
     assert victim.read_text() == SECRET
     assert (out / "points.jsonl").is_symlink()
+
+
+@pytest.mark.parametrize("journal, command", [("points.jsonl", "pareto"),
+                                              ("cells.jsonl", "atlas")])
+def test_resume_refuses_a_journal_with_another_name(tmp_path, small_problem, victim, capsys,
+                                                    journal, command):
+    """A journal hard-linked to a file outside the folder would be appended to there."""
+    out = tmp_path / "front"
+    out.mkdir()
+    os.link(victim, out / journal)
+    problem = small_problem if command == "pareto" else ROOT / "problems" / "atlas_fourbar.yaml"
+    assert main([command, str(problem), "--out", str(out), "--resume", "--workers", "1"]
+                + (["--no-report"] if command == "pareto" else [])) == 2
+    err = capsys.readouterr().err
+    assert f"{journal}: is a file with 2 names (a hard link)" in err and err.count("\n") == 1
+    assert victim.read_text() == SECRET
 
 
 def test_the_journal_is_never_appended_through_a_link(tmp_path, victim):

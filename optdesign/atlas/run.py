@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import sys
 import time
 from dataclasses import dataclass, field
@@ -30,8 +29,9 @@ from pathlib import Path
 from optdesign.atlas.spec import AtlasSpec, Cell
 from optdesign.atlas.worker import solve_cell
 from optdesign.errors import OptDesignError, ProblemError
-from optdesign.fronts.store import Journal
+from optdesign.fronts.store import Journal, to_solve_again
 from optdesign.lifetime import raise_if_terminated
+from optdesign.limits import local_processes
 from optdesign.solver import verify
 
 #: a resumed record's δ and ratio must match its design's exact figures to this (relative)
@@ -271,7 +271,7 @@ def _n_workers(ex, workers) -> int:
             return max(1, len(client.scheduler_info()["workers"]))
         except (OSError, KeyError, TypeError):
             return 2
-    return workers or os.cpu_count() or 1
+    return local_processes(workers)
 
 
 def _line_of(journal: Journal, rec: dict) -> str:
@@ -291,8 +291,11 @@ def _checked_index(rec: dict, cells: list[Cell], journal: Journal) -> int:
 
 
 def _reverify(spec: AtlasSpec, cells: list[Cell], done: dict, journal: Journal) -> None:
-    """Every resumed feasible record's design evaluated exactly and its figures compared: a
-    journal is trusted only where its numbers are its designs' own."""
+    """Every resumed record checked: one that is not a feasible optimum (an infeasible or
+    failed cell, a status that is no known verdict) is solved again
+    (:func:`~optdesign.fronts.store.to_solve_again`: removed from ``done``), and every
+    feasible record's design is evaluated exactly and its figures compared: a journal is
+    trusted only where its numbers are its designs' own."""
     for index, rec in done.items():
         where = _line_of(journal, rec)
         cell = cells[index]
@@ -300,8 +303,10 @@ def _reverify(spec: AtlasSpec, cells: list[Cell], done: dict, journal: Journal) 
                 "phases"]:
             raise ProblemError(f"{where}: the record's axes' values are not its cell's; run "
                                f"without --resume to start afresh")
-        if not rec["feasible"]:
-            continue
+    to_solve_again(done)
+    for index, rec in done.items():
+        where = _line_of(journal, rec)
+        cell = cells[index]
         try:
             ver = verify(spec.problem(cell), dict(rec["design"]))
         except (OptDesignError, KeyError, TypeError, ValueError, ArithmeticError) as exc:

@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from optdesign.errors import ProblemError, UnitWarning
+from optdesign.limits import COUNTS
 from optdesign.mechanisms import get_mechanism
 from optdesign.problem.loader import MAX_COUNT, Reader, name_from_stem, problem_from_dict
 from optdesign.problem.yaml_text import parse, read_text
@@ -45,8 +46,8 @@ TOP_KEYS = {"name", "mechanism", "design", "axes", "fixed", "objective", "option
 OBJECTIVE_KEYS = {"minimize", "ripple"}
 RANGE_KEYS = {"lower", "upper", "step"}
 #: most cells of one atlas, and most values of one axis
-MAX_CELLS = 100_000
-MAX_VALUES = 1000
+MAX_CELLS = COUNTS["cells"]
+MAX_VALUES = COUNTS["axis_values"]
 #: the crank speed of every cell [rad/s]: δ and the ratio do not depend on it
 INPUT_SPEED = 1.0
 
@@ -241,6 +242,10 @@ def _read_values(r: Reader, value, key: str, name: str, model) -> tuple:
     step = r.number(entry["step"], f"{key}.step")
     if step <= 0:
         raise r.error(f"{key}.step", f"must be positive (got {step:g})")
+    if name == "phases" and step != int(step):
+        # a count steps by whole numbers: 3, 3.5, 4 would be rounded into repeated cells
+        raise r.error(f"{key}.step", f"must be a whole number: the count takes whole values "
+                                     f"(got {step:g})")
     if upper < lower:
         raise r.error(f"{key}.upper", f"must not be below lower (got {upper:g} < {lower:g})")
     n = int(math.floor((upper - lower) / step + 1e-9)) + 1

@@ -10,10 +10,11 @@ beside it (:mod:`optdesign.export.animation`). Exit 0; 1 when the design does no
 from __future__ import annotations
 
 from optdesign.commands.design_source import add_arguments, checked_eccentricity, loaded
+from optdesign.limits import COUNTS
 from optdesign.outputs.phases import answered, phase
 
 #: most frames of --frames
-MAX_FRAMES = 720
+MAX_FRAMES = COUNTS["frames"]
 #: most frames of the GIF and the MP4 (a turn in 5 s): each is drawn by matplotlib
 MOVIE_FRAMES = 60
 

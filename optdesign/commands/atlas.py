@@ -11,12 +11,14 @@ ATLAS_FILES = ("cells.jsonl", "atlas.csv", "atlas.json", "atlas_counts.png", "at
 
 def add_parser(sub) -> None:
     from optdesign.commands.pareto import _positive
+    from optdesign.limits import COUNTS, PROCESSES_PER_CORE
     p = sub.add_parser("atlas", help="least ripple over a grid of rules, in lengths relative "
                                      "to the crank (a design atlas)")
     p.add_argument("atlas", help="atlas file (YAML, docs/atlas.md)")
     p.add_argument("--out", help="output folder (default results/NAME/)")
-    p.add_argument("--workers", type=_positive(1), help="local worker processes "
-                                                         "(default: every core)")
+    p.add_argument("--workers", type=_positive(1, COUNTS["workers"]),
+                   help="worker processes (default: every core; a local pool starts at most "
+                        f"{PROCESSES_PER_CORE} per core)")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="run the cells on this Dask scheduler (needs optdesign[cluster])")
     p.add_argument("--resume", action="store_true",

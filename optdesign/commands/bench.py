@@ -4,9 +4,11 @@ Error of δ, the ratio and ω_min against run time for every evaluator (optdesig
 """
 from __future__ import annotations
 
+from optdesign.limits import COUNTS
+
 DEFAULT_PROBLEM = "problems/sharkov2022.yaml"
-#: most crank samples of --crosscheck (sampled in chunks: time grows, memory does not)
-MAX_CROSSCHECK = 100_000_000
+#: most crank samples of --crosscheck
+MAX_CROSSCHECK = COUNTS["crosscheck"]
 
 
 def add_parser(sub) -> None:

@@ -3,10 +3,11 @@ position, velocity and acceleration analogues."""
 from __future__ import annotations
 
 from optdesign.commands.design_source import add_arguments, loaded
+from optdesign.limits import COUNTS
 from optdesign.outputs.phases import answered, phase
 
 #: most crank samples of --samples (a figure of 1441 is already smooth)
-MAX_SAMPLES = 100_000
+MAX_SAMPLES = COUNTS["curve_samples"]
 
 
 def add_parser(sub) -> None:

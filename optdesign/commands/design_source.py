@@ -10,7 +10,10 @@
   beside the CSV).
 
 Without it a command evaluates the problem file's own design (its free lengths at their
-initial values). Every value is checked against the problem by the loader's rules
+initial values). A design file of another mechanism than the problem's (by its
+``mechanism``, or by its lengths), or one that lacks a length, is refused: a design is
+taken whole, never completed from the problem file. Every value is checked against the
+problem by the loader's rules
 (:meth:`optdesign.problem.loader.Problem.with_design`); any fault is a one-line
 :class:`~optdesign.errors.UsageError` naming the option and the file (exit 2).
 """
@@ -123,14 +126,18 @@ def design_from_file(name: str, problem, point: int | None = None,
             raise UsageError(f"{where}: --point and --knee pick a point of a front "
                              f"(pareto.csv), not of a problem file")
         values, source = _from_problem_file(path, problem, where), f"the design of {path}"
+        return ChosenDesign(_checked(values, problem, where), source)
     elif suffix in FRONT_SUFFIXES or (suffix == ".json" and (point is not None or knee)):
         if point is None and not knee:
             raise UsageError(f"{where}: a front holds many designs: pick one with --point K "
                              f"or --knee")
         values, source = _from_front(path, problem, where, point)
+        what = "the knee" if point is None else f"point {point}"
     else:
         values, source = _from_result(path, problem, where)
-    return ChosenDesign(_checked(values, problem, where), source)
+        what = "its design"
+    return ChosenDesign(_whole(_checked(_of_the_mechanism(values, problem, where, what),
+                                        problem, where), problem, where, what), source)
 
 
 def _text(path: Path, where: str) -> str:
@@ -159,7 +166,7 @@ def _from_result(path: Path, problem, where: str) -> tuple[dict, str]:
     if not isinstance(design, dict):
         raise UsageError(f"{where}: has no design object (a solve that found none writes "
                          f"design: null)")
-    _same_mechanism(data.get("mechanism"), problem, where)
+    _same_mechanism(data.get("mechanism"), problem, where, "its design")
     status = data.get("status")
     what = "the optimum" if status == "optimal" else "the design"
     return design, f"{what} of {path}"
@@ -173,7 +180,7 @@ def _from_problem_file(path: Path, problem, where: str) -> dict:
         other = load_problem(path)
     except ProblemError as exc:
         raise UsageError(f"{where}: {exc}") from None
-    _same_mechanism(other.mechanism, problem, where)
+    _same_mechanism(other.mechanism, problem, where, "its design")
     free = [k for k, v in other.design.items() if v.is_free]
     if free:
         raise UsageError(f"{where}: design.{free[0]} is not fixed (a design file fixes every "
@@ -213,10 +220,14 @@ def _from_front(path: Path, problem, where: str, point: int | None) -> tuple[dic
 
 
 def _design_of(record: dict, problem) -> dict:
-    """The design keys of a front's record: the lengths and the count (by the mechanism's
+    """The design keys of a front's record: the lengths (of any mechanism: a front of
+    another is named so by :func:`_of_the_mechanism`) and the count (by the mechanism's
     name, or the generic ``count``)."""
+    from optdesign.mechanisms import get_mechanism, known
+
     model = problem.model
-    out = {k: record[k] for k in model.lengths if k in record}
+    lengths = {k for m in known() for k in get_mechanism(m).lengths}
+    out = {k: v for k, v in record.items() if k in lengths and v not in (None, "")}
     for name in (model.count_variable, "count", "phases"):
         if record.get(name) not in (None, ""):
             out[model.count_variable] = record[name]
@@ -231,10 +242,39 @@ def _number(value) -> str:
         return "?"
 
 
-def _same_mechanism(mechanism, problem, where: str) -> None:
+def _same_mechanism(mechanism, problem, where: str, what: str) -> None:
     if isinstance(mechanism, str) and mechanism != problem.mechanism:
-        raise UsageError(f"{where}: is a design of {shown(mechanism)}, the problem's mechanism "
-                         f"is {problem.mechanism}")
+        name = mechanism if mechanism.isidentifier() and len(mechanism) <= 40 else \
+            shown(mechanism, 40)
+        raise UsageError(f"{where}: {what} is a {name} design; {problem.source} is a "
+                         f"{problem.mechanism}")
+
+
+def _of_the_mechanism(design: dict, problem, where: str, what: str) -> dict:
+    """``design`` when it can be the problem's mechanism's; UsageError naming both
+    mechanisms when its lengths are every length of another mechanism and not the
+    problem's (a pulse reducer's front given to a four-bar's problem)."""
+    from optdesign.mechanisms import get_mechanism, known
+
+    present = {k for k, v in design.items() if v not in (None, "")}
+    if set(problem.model.lengths) <= present:
+        return design
+    for other in known():
+        if other != problem.mechanism and set(get_mechanism(other).lengths) <= present:
+            _same_mechanism(other, problem, where, what)
+    return design
+
+
+def _whole(values: dict, problem, where: str, what: str) -> dict:
+    """``values`` when they name every length of the problem's mechanism: a design is
+    taken whole or not at all, never completed from the problem file's own values (which
+    the words "point 3 of the front" would then misname)."""
+    missing = [k for k in problem.model.lengths if k not in values]
+    if missing:
+        raise UsageError(f"{where}: {what} has no {missing[0]} (a {problem.mechanism} design "
+                         f"names every length: {', '.join(problem.model.lengths)}; none is "
+                         f"taken from {problem.source})")
+    return values
 
 
 def _checked(design: dict, problem, where: str) -> dict:

@@ -5,11 +5,12 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from optdesign.limits import COUNTS, PROCESSES_PER_CORE
 from optdesign.outputs.phases import phase
 
-#: most ε values of --points: pareto.section.MAX_POINTS (not imported here: the pareto
-#: package pulls in pandas, and building the parser must stay light)
-MAX_POINTS = 1000
+#: most ε values of --points, as pareto.points (the table, not the pareto package: that one
+#: pulls in pandas, and building the parser must stay light)
+MAX_POINTS = COUNTS["points"]
 
 
 def add_parser(sub) -> None:
@@ -21,8 +22,9 @@ def add_parser(sub) -> None:
     p.add_argument("--against", metavar="QUANTITY",
                    help="trade the ripple against this quantity instead of the file's "
                         "pareto.against (the ratio by default), e.g. housing_radius")
-    p.add_argument("--workers", type=_positive(1), help="local worker processes "
-                                                         "(default: every core)")
+    p.add_argument("--workers", type=_positive(1, COUNTS["workers"]),
+                   help="worker processes (default: every core; a local pool starts at most "
+                        f"{PROCESSES_PER_CORE} per core)")
     p.add_argument("--resume", action="store_true",
                    help="continue an interrupted sweep in --out without recomputing its points")
     p.add_argument("--scheduler", metavar="ADDRESS",

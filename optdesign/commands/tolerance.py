@@ -13,10 +13,11 @@ from __future__ import annotations
 import sys
 
 from optdesign.commands.design_source import add_arguments, chosen_design
+from optdesign.limits import COUNTS
 from optdesign.outputs.phases import phase
 
 #: most parts of --samples (tolerances.samples has the same limit)
-MAX_SAMPLES = 10_000_000
+MAX_SAMPLES = COUNTS["parts"]
 MAX_SEED = 2**32 - 1
 
 

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 from optdesign.declarations import Key, REQUIRED as REQUIRED_KEY
 from optdesign.errors import ProblemError
+from optdesign.limits import COUNTS
 
 METHODS = ("Radau", "BDF", "LSODA", "RK45")
 FREEWHEEL_MODELS = ("ratchet", "composite")
@@ -37,7 +38,7 @@ CRANK_MODELS = ("dynamic", "constant")
 KEYS = {"I1", "I2", "stiffness", "damping_ratio", "motor", "load", "cycles", "reduction",
         "freewheel", "crank", "method", "rtol", "atol", "steady_tol"}
 REQUIRED = ("I1", "I2", "stiffness", "motor", "load")
-MAX_CYCLES = 100_000           # crank turns: a day of computing, not a typo's 1e9
+MAX_CYCLES = COUNTS["cycles"]
 MIN_ANGLE_STEP_DEG = 1e-6     # load table: closer points make its slope overflow
 #: key -> (lower, upper, unit): the magnitudes the integrator is trusted with. The bounds are
 #: far outside any drive (1e-8 kg·m² is a steel disc 1 cm across; 1e10 N·m/rad is stiffer

@@ -24,6 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 from optdesign.declarations import Key, names
+from optdesign.limits import COUNTS
 from optdesign.fronts.axis import choices as axis_choices
 from optdesign.fronts.refine import (DEFAULT_DELTA_RESOLUTION, DEFAULT_HYPERVOLUME_GAP,
                                      DEFAULT_HYPERVOLUME_POINTS, DEFAULT_MAX_GAP,
@@ -32,7 +33,7 @@ from optdesign.fronts.refine import (DEFAULT_DELTA_RESOLUTION, DEFAULT_HYPERVOLU
 from optdesign.quantities import get_quantity
 
 DEFAULT_POINTS = 12
-MAX_POINTS = 1000
+MAX_POINTS = COUNTS["points"]
 
 #: the section's keys (docs/problem-file.md is generated from them)
 DECLARATION = Key(

@@ -117,25 +117,54 @@ class Journal:
                                    f"only as a regular file in the output folder") from None
             raise
         try:
-            if not stat.S_ISREG(os.fstat(fd).st_mode):
+            st = os.fstat(fd)
+            if not stat.S_ISREG(st.st_mode):
                 raise ProblemError(f"{self.path}: is not a regular file; the journal is "
                                    f"written only as a regular file in the output folder")
+            if st.st_nlink > 1:
+                raise ProblemError(f"{self.path}: has another name (a hard link); the "
+                                   f"journal is written only as a file of the output folder's "
+                                   f"own")
             os.write(fd, line.encode("utf-8"))      # one write per line: whole or nothing
             os.fsync(fd)
         finally:
             os.close(fd)
 
     def _require_regular(self) -> None:
-        """Refuse a journal that is a link or anything but a regular file: what the run
-        reads and appends to stays inside the output folder."""
+        """Refuse a journal that is a link, a hard link (a file with another name, maybe
+        outside the output folder, that an append would change) or anything but a regular
+        file: what the run reads and appends to stays inside the output folder."""
         try:
-            mode = os.lstat(self.path).st_mode
+            st = os.lstat(self.path)
         except FileNotFoundError:
             return
-        if not stat.S_ISREG(mode):
-            what = "a link" if stat.S_ISLNK(mode) else "not a regular file"
+        if not stat.S_ISREG(st.st_mode) or st.st_nlink > 1:
+            what = ("a link" if stat.S_ISLNK(st.st_mode) else "not a regular file"
+                    if not stat.S_ISREG(st.st_mode) else
+                    f"a file with {st.st_nlink} names (a hard link)")
             raise ProblemError(f"{self.path}: is {what}; a journal to resume must be a "
-                               f"regular file in the output folder (it is left as it is)")
+                               f"regular file of the output folder's own (it is left as it "
+                               f"is)")
+
+
+#: the statuses a record of a solve may hold: ``optimal`` (a verified feasible design, the one
+#: status with ``feasible`` true), ``infeasible``, ``failed``
+STATUSES = ("optimal", "infeasible", "failed")
+
+
+def to_solve_again(records: dict) -> list:
+    """The keys of the resumed ``records`` (by key) to solve again rather than keep, removed
+    from ``records``: every one but a feasible ``optimal`` record. A feasible design can be
+    checked (evaluated exactly again, by the caller); a verdict that no design was found
+    cannot be checked without the solve, and a status that is not one of :data:`STATUSES`,
+    or that disagrees with ``feasible`` (``"feasible": false, "status": "optimal"``), is no
+    verdict at all. Solving them again keeps a forged or foreign record out of a front or an
+    atlas, and gives the result an uninterrupted run gives."""
+    keys = [k for k, r in records.items()
+            if not (r["feasible"] is True and r["status"] == "optimal")]
+    for k in keys:
+        del records[k]
+    return keys
 
 
 #: a record's fields and their types (None allowed where a point has no verified design)

@@ -32,8 +32,9 @@ from optdesign.fronts.cluster import connect
 from optdesign.fronts.files import write_front
 from optdesign.fronts.front import ParetoResult, evaluate, frame
 from optdesign.fronts.section import DEFAULT_POINTS, ParetoSection
-from optdesign.fronts.store import Journal
+from optdesign.fronts.store import Journal, to_solve_again
 from optdesign.lifetime import die_with_parent, raise_if_terminated, signals_held
+from optdesign.limits import local_processes
 from optdesign.quantities.criteria import result_columns
 from optdesign.solver import verify
 
@@ -147,7 +148,7 @@ def _is_terminal(stream) -> bool:
 def _executor(workers: int | None, scheduler):
     if scheduler is not None:
         return _Dask(scheduler)
-    workers = workers or os.cpu_count() or 1
+    workers = local_processes(workers)
     return _Inline() if workers == 1 else _Pool(workers)
 
 
@@ -225,7 +226,7 @@ class _Sweep:
         _reverify(self.problem, self.done, self.journal)
         self.n_resumed = len(self.done)
         self.ex = _executor(workers, scheduler)
-        self.n_workers = workers or os.cpu_count() or 1
+        self.n_workers = local_processes(workers)
         self.n_chains = max(2, -(-self.n_workers // max(1, len(self.counts))))
         from tqdm import tqdm
         refined = sum(1 for r in self.done.values() if (r.get("round") or 0) >= 1)
@@ -437,13 +438,14 @@ RESUME_REL = 1e-9
 
 
 def _reverify(problem, done: dict, journal: Journal) -> None:
-    """Every resumed feasible record's design evaluated exactly again before it enters a front:
-    its δ, ratio and least transmission angle must be the record's, and the design must meet
-    the problem's constraints. An edited or foreign record is refused (exit 2) with its line;
+    """Every resumed record checked before it enters a front: one that is not a feasible
+    optimum is solved again (:func:`~optdesign.fronts.store.to_solve_again`: removed from
+    ``done``), and every feasible record's design is evaluated exactly again: its δ, ratio
+    and least transmission angle must be the record's, and the design must meet the
+    problem's constraints. An edited or foreign record is refused (exit 2) with its line;
     the journal is left as it is."""
+    to_solve_again(done)
     for key, rec in done.items():
-        if not rec.get("feasible"):
-            continue
         where = f"{journal.path}: line {journal.line_of.get(key, '?')}"
         design = dict(rec["design"])
         design.setdefault(problem.model.count_variable, rec["count"])

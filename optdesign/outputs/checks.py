@@ -11,6 +11,7 @@ import tempfile
 from pathlib import Path
 
 from optdesign.errors import UsageError, shown
+from optdesign.outputs.links import followed
 
 #: where the commands write when no ``--out`` is given
 RESULTS = Path("results")
@@ -49,20 +50,23 @@ def system_tree(real: str) -> str | None:
     return None
 
 
-def resolve_out(out: str | Path | None, name: str, suffix: str = "") -> tuple[Path, str]:
+def resolve_out(out: str | Path | None, name: str, suffix: str = "",
+                option: str = "--out") -> tuple[Path, str]:
     """(the output folder, its label for messages), checked and normalised but not created.
 
     ``out`` is the ``--out`` argument (None: :func:`default_out` of ``name``). An empty name
     is refused (it would mean the current folder); ``..`` is resolved as the kernel resolves
-    it, so ``a/b/../../x`` is ``x`` and creates no ``a/b``. Raises :class:`UsageError`.
+    it, so ``a/b/../../x`` is ``x`` and creates no ``a/b``. A link on the way that the
+    kernel's protected-symlinks rule would not follow (another user's, in a shared sticky
+    folder: :mod:`optdesign.outputs.links`) is refused. Raises :class:`UsageError`.
     """
-    label = f"--out {shown(str(out))}" if out is not None else \
-        f"{default_out(name, suffix)} (the default output folder; give --out)"
+    label = f"{option} {shown(str(out))}" if out is not None else \
+        f"{default_out(name, suffix)} (the default output folder; give {option})"
     text = os.fspath(out) if out is not None else str(default_out(name, suffix))
     if not text.strip() or "\0" in text:
         raise UsageError(f"{label}: is not a folder name")
     path = Path(text)
-    real = os.path.realpath(path)
+    real = followed(path, label)
     tree = system_tree(real)
     if tree:
         raise UsageError(f"{label}: is under {tree}, not a place for results")
@@ -72,14 +76,15 @@ def resolve_out(out: str | Path | None, name: str, suffix: str = "") -> tuple[Pa
 
 
 def prepare_out(out: str | Path | None, name: str, suffix: str = "",
-                files: tuple[str, ...] = ()) -> Path:
+                files: tuple[str, ...] = (), option: str = "--out") -> Path:
     """The output folder of a command (:func:`resolve_out`), made and checked writable
     before any work.
 
     ``files`` are the names the command will write there: none may be a folder. Raises
-    :class:`UsageError` (exit 2) naming the folder and the reason.
+    :class:`UsageError` (exit 2) naming the folder (as ``option``, the flag or the API's
+    argument, gave it) and the reason.
     """
-    path, label = resolve_out(out, name, suffix)
+    path, label = resolve_out(out, name, suffix, option)
     try:
         if path.exists() and not path.is_dir():
             raise UsageError(f"{label}: exists and is not a folder")

@@ -31,7 +31,10 @@ otherwise), and it is removed when the run ends; a leftover sibling is touched o
 real folder (not a link) of this user, a commit's manifest only if it names plain names of the
 command's own set (anything else: the leftover is left as it is, with a word on stderr, and
 nothing is deleted or moved); only regular files are ever moved in; a replaced folder keeps
-its mode.
+its owner, group, mode and extended attributes (:mod:`optdesign.outputs.attributes`), and a
+folder whose attributes the run cannot give its sibling is written into in place; a link on
+the way to the folder is followed only as the kernel's protected-symlinks rule allows
+(:mod:`optdesign.outputs.links`).
 """
 from __future__ import annotations
 
@@ -47,6 +50,8 @@ from typing import Callable, Iterable
 
 from optdesign.errors import ProblemError
 from optdesign.outputs.atomic import atomic_write_json
+from optdesign.outputs.attributes import take_on
+from optdesign.outputs.links import followed
 
 #: in a set marked for commit: the names its command owns
 MARKER = ".optdesign-set.json"
@@ -70,7 +75,9 @@ class OutputFolder:
 
     def __init__(self, path: str | Path, owned: Iterable[str]):
         self.shown = Path(path)
-        self.path = Path(os.path.realpath(path))
+        # a planted link is refused here too, not only by the check before the work: the
+        # folder is claimed minutes later, and may be replaced as a whole
+        self.path = Path(followed(path, str(path)))
         self.owned = frozenset(owned)
         self._lock_fd: int | None = None
 
@@ -150,11 +157,12 @@ class OutputFolder:
         staging = self._sibling(f"{_NEW}-{token}")
         staging.mkdir()
         try:
-            if self.path.is_dir():                       # the set keeps the folder's mode
-                os.chmod(staging, stat.S_IMODE(self.path.stat().st_mode))
+            # the set keeps the folder's owner, group, mode and extended attributes; where
+            # the sibling cannot be given them, it is committed into the folder instead
+            kept = take_on(self.path, staging) if self.path.is_dir() else True
             written = write(staging)
             _fsync_dir(staging)
-            if self._holds_only_owned() and not self._holds_working_folder():
+            if kept and self._holds_only_owned() and not self._holds_working_folder():
                 self._exchange_in(staging, token)
             else:
                 self._commit_in_place(staging, token)

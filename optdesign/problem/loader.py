@@ -19,6 +19,7 @@ from typing import Any, Mapping
 from optdesign.declarations import Key, REQUIRED, names
 from optdesign.envelope.sampled import STROKE_SIGNS
 from optdesign.errors import ProblemError, shown
+from optdesign.limits import COUNTS
 from optdesign.mechanisms import get_mechanism, known
 from optdesign.problem.plausibility import warn_implausible
 from optdesign.problem.yaml_text import parse, read_text
@@ -233,23 +234,23 @@ REGULATION_KEYS: tuple[Key, ...] = (
 
 SOLVER_KEYS: tuple[Key, ...] = (
     Key("samples", "integer", "crank samples per turn in the NLP (docs/accuracy.md)",
-        default=SolverSettings.samples, lower=16, upper=2000),
+        default=SolverSettings.samples, lower=16, upper=COUNTS["nlp_samples"]),
     Key("screen", "integer", "designs screened before IPOPT (a Sobol sample of the box)",
-        default=SolverSettings.screen, lower=1, upper=65_536),
+        default=SolverSettings.screen, lower=1, upper=COUNTS["screen"]),
     Key("basins", "integer", "best basins of the screening polished by IPOPT",
-        default=SolverSettings.basins, lower=1, upper=64),
+        default=SolverSettings.basins, lower=1, upper=COUNTS["basins"]),
     Key("workers", "integer", "processes polishing basins at once (0: every core)",
-        default=SolverSettings.workers, lower=0, upper=256),
+        default=SolverSettings.workers, lower=0, upper=COUNTS["workers"]),
     Key("starts", "integer", "most IPOPT polishes per phase count",
-        default=SolverSettings.starts, lower=1, upper=1000),
+        default=SolverSettings.starts, lower=1, upper=COUNTS["starts"]),
     Key("agree", "integer", "a count is infeasible after agree + 1 local-infeasibility "
-        "verdicts on one constraint", default=SolverSettings.agree, lower=1, upper=100),
+        "verdicts on one constraint", default=SolverSettings.agree, lower=1, upper=COUNTS["agree"]),
     Key("smoothing", "number", "log-sum-exp ρ of the smooth maximum, per unit of ω/ω1",
         default=SolverSettings.smoothing, lower=0, open_lower=True, upper=SMOOTHING_MAX),
     Key("seed", "integer", "seed of the screening's sample", default=SolverSettings.seed,
         lower=0, upper=2**32 - 1),
     Key("max_iter", "integer", "IPOPT iterations per polish", default=SolverSettings.max_iter,
-        lower=1, upper=100_000),
+        lower=1, upper=COUNTS["max_iter"]),
     Key("hessian", "choice", "IPOPT's Hessian: a limited-memory quasi-Newton one, or CasADi's "
         "exact second derivatives", default=SolverSettings.hessian, choices=HESSIANS),
     Key("peak_samples", "bool", "also bound ω_max at every sample (a safety net)",

@@ -471,11 +471,12 @@ def workers_for(problem) -> int:
     """Processes for the polishes: ``solver.workers``, or (0) every core, where the platform
     can fork."""
     import multiprocessing as mp
-    import os
+
+    from optdesign.limits import local_processes
 
     if "fork" not in mp.get_all_start_methods():
         return 1
-    return problem.solver.workers or os.cpu_count() or 1
+    return local_processes(problem.solver.workers)
 
 
 def solve_phase(problem, count: int, solver: PhaseSolver | None = None,

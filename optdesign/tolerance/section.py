@@ -21,13 +21,14 @@ from typing import Mapping
 
 from optdesign.declarations import Key, names
 from optdesign.errors import ProblemError
+from optdesign.limits import COUNTS
 from optdesign.mechanisms import get_mechanism, known
 
 DEFAULT_TOLERANCE_MM = 0.05
 DISTRIBUTIONS = ("uniform", "normal")
 DEFAULT_K = 3.0
 DEFAULT_SAMPLES = 10_000
-MAX_SAMPLES = 10_000_000
+MAX_SAMPLES = COUNTS["parts"]
 MAX_SEED = 2**32 - 1
 
 

@@ -78,3 +78,27 @@ def test_a_killed_dask_worker_loses_no_cell(cluster, tiny_path, tiny_atlas, tmp_
         assert procs[victim].wait(timeout=10) == -signal.SIGKILL
     assert sorted(r["cell"] for r in _records(out)) == [0, 1, 2, 3]
     _same_atlas(out, tiny_atlas[1])
+
+
+@pytest.mark.parametrize("forged", [
+    {"status": "infeasible", "feasible": False, "design": {}, "delta": None, "ratio": None},
+    {"status": "garbage"},
+], ids=["optimum said infeasible", "unknown status"])
+def test_a_resumed_cell_that_is_not_a_feasible_optimum_is_solved_again(
+        tiny_path, tiny_atlas, tmp_path, forged):
+    """A verdict that no design was found cannot be checked without the solve, and a status
+    that is none is no verdict: the cell is solved again, the atlas is the uninterrupted one."""
+    import json
+
+    done, reference = tiny_atlas
+    out = tmp_path / "again"
+    out.mkdir()
+    lines = (done / "cells.jsonl").read_text().splitlines()
+    rec = json.loads(lines[1])
+    lines[1] = json.dumps(rec | forged)
+    (out / "cells.jsonl").write_text("\n".join(lines) + "\n")
+    code, stdout = run_main(["atlas", tiny_path, "--out", out, "--workers", "1", "--resume",
+                             "--no-plots"])
+    assert code == 0 and f"({len(lines) - 2} resumed)" in stdout
+    _same_atlas(out, reference)
+    assert "garbage" not in (out / "atlas.csv").read_text()

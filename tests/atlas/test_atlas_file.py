@@ -31,6 +31,9 @@ CASES = [
                                                           "atlas maps the least ripple"),
     (lambda d: d["axes"].update(stroke={"lower": 1, "upper": 2, "step": 1}),
      "tiny.yaml: axes.stroke must be a list of values"),
+    (lambda d: d["axes"].update(phases={"lower": 3, "upper": 5, "step": 0.5}),
+     "tiny.yaml: axes.phases.step must be a whole number: the count takes whole values "
+     "(got 0.5)"),
 ]
 
 

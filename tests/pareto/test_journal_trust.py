@@ -71,3 +71,25 @@ def test_an_untouched_journal_resumes_to_the_same_front(small_front, small_path,
     folder, _ = _copy(small_front, tmp_path)
     again = sweep(load_problem(small_path), folder, workers=1, resume=True, progress=False)
     assert list(again.points["delta"]) == list(result.points["delta"])
+
+
+@pytest.mark.parametrize("forged", [
+    {"feasible": False, "status": "optimal", "delta": 1e-6, "ratio": 5.0},
+    {"status": "garbage"},
+    {"feasible": False, "status": "infeasible", "design": {}, "delta": None, "ratio": None},
+], ids=["not feasible yet optimal", "unknown status", "feasible point said infeasible"])
+def test_a_record_that_is_not_a_feasible_optimum_is_solved_again(small_front, small_path,
+                                                                   tmp_path, forged):
+    """Only a feasible design can be checked exactly; any other record (a forged verdict, a
+    status that is none) is solved again, so it never becomes the knee or hides a point."""
+    result, _ = small_front
+    folder, lines = _copy(small_front, tmp_path)
+    number = next(i for i, line in enumerate(lines, 1)
+                  if i > 1 and json.loads(line).get("feasible")
+                  and json.loads(line)["kind"] == "sweep")
+    _edit(folder, lines, number, lambda r: r.update(forged))
+    again = sweep(load_problem(small_path), folder, workers=1, resume=True, progress=False)
+    assert again.run["resumed_points"] == len(lines) - 2
+    assert again.indicators["knee"] == result.indicators["knee"]
+    assert list(again.points["delta"]) == list(result.points["delta"])
+    assert set(again.points["status"]) <= {"optimal", "local", "infeasible", "failed"}

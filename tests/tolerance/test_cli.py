@@ -97,7 +97,9 @@ def test_the_terminal_table(solved):
     ('{"design": null}', "has no design object"),
     ('{"design": {"l9": 3}}', "design.l9 is not a design key"),
     ('{"design": {"l3": -1}}', "design.l3 must be a positive number"),
-    ('{"design": {"l3": 56}, "mechanism": "slotted_lever"}', "is a design of"),
+    ('{"design": {"l3": 56}, "mechanism": "slotted_lever"}',
+     "its design is a slotted_lever design; "),
+    ('{"design": {"l3": 56, "phases": 6}}', "its design has no l0"),
     ('{"design": {"l3": 56, "phases": 2.5}}', "design.phases must be a whole number the "
                                                "problem admits (6; got 2.5)"),
     ('{"design": {"l3": 56, "phases": 100000}}', "design.phases must be a whole number"),

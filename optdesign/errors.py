@@ -20,8 +20,15 @@ class AssemblyError(OptDesignError):
     def __init__(self, chain: int, phi_deg: float, detail: str = ""):
         self.chain = chain
         self.phi_deg = phi_deg
+        self.detail = detail
         text = f"chain {chain} does not assemble at crank angle {phi_deg:.2f} deg"
         super().__init__(text + (f" ({detail})" if detail else ""))
+
+    def __reduce__(self):
+        """Pickled with its own arguments: a polish's outcome crosses a process boundary
+        with the failure it verified (the default would call ``__init__`` with the message
+        alone, and the pool's reader would die unpickling it)."""
+        return type(self), (self.chain, self.phi_deg, self.detail)
 
 
 class SolveError(OptDesignError):

@@ -26,7 +26,7 @@ import casadi as ca
 import numpy as np
 
 from optdesign.envelope.exact import search_grid
-from optdesign.quantities.extremes import turn_maxima
+from optdesign.quantities.extremes import BREAK_STEP, turn_maxima
 
 #: how a quantity's values combine: into its worst, and across its components
 COMBINE = {"max": max, "min": min}
@@ -185,12 +185,20 @@ class TurnQuantity(Quantity):
 
     def track(self, builder, block):
         """A free angle per component with g_i'(φ_i) = 0 (a stationary point, windowed like the
-        peaks by the driver), so each component is held at its exact extreme."""
+        peaks by the driver), so each component is held at its exact extreme; and, for a
+        piecewise mechanism, the components at each side of its breakpoints, where an extreme
+        has no stationary point (the pulse reducer's dead centres, fixed by the count)."""
         tracked = self.tracked(block.model, block.count, block.options)
         phi_q = builder.variable(f"phi_q_{self.name}_{block.tag}", tracked.size1_in(0))
         values, slopes = tracked(phi_q, block.pvec)
         builder.row(f"q_stationary_{self.name}[{block.tag}]", slopes)
-        block.tracked[self.name] = self.components(values, block.input_speed)
+        figures = [self.components(values, block.input_speed)]
+        g, _ = self.function(block.model, block.count, block.options)
+        for b in block.model.breakpoints({}, block.count):
+            for side in (b - BREAK_STEP, b + BREAK_STEP):
+                figures.append(self.components(g(side % (2 * math.pi), block.pvec),
+                                               block.input_speed))
+        block.tracked[self.name] = ca.vertcat(*figures)
 
     def figures(self, block, attained=False):
         """The components at their exact stationary points: exact, so both forms are one."""

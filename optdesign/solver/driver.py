@@ -45,6 +45,8 @@ STALLED = "Stalled_Infeasible"
 #: the status of a secondary basin's polish stopped at its budget (nlp.SECONDARY_BUDGET)
 EXHAUSTED = "Secondary_Budget_Exhausted"
 MAX_REFINEMENTS = 4
+#: screened designs checked exactly when no polish converges (best ranked first)
+CHECKED_WHEN_STUCK = 16
 #: re-solves with new held eccentricities (a regulation interval), besides MAX_REFINEMENTS
 MAX_REGULATION_STEPS = 6
 #: the worst δ inside the interval may exceed the held eccentricities' worst by this much
@@ -517,7 +519,10 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
     relax = explain and not robust and bool(screening.seeds)
     reach = None
     if relax and screening.n_feasible == 0:
-        reach = _reach(problem, count, None, workers, [given], basins.timings)
+        # the bound most of the sample misses first
+        missed = sorted(screening.missed, key=lambda n: -screening.missed[n])
+        reach = _reach(problem, count, missed[0] if missed else None, workers, [given],
+                       basins.timings)
         if reach is not None and reach.out_of_reach:
             result.timings = solver.timings.to_dict()
             return _infeasible(result, problem, count, reach)
@@ -526,8 +531,6 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
         seeds.insert(0, _seed(problem, reach.design))   # meets every bound: polish it first
     work.basins(seeds)
     work.lines()
-    if not robust:
-        work.consider(basins.as_it_is(given))
     if work.best is None and relax and reach is None:
         reach = _reach(problem, count, _binding_of(result), workers,
                        [given] + [o.values for o in work.outcomes], basins.timings)
@@ -535,8 +538,19 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
             result.timings = solver.timings.to_dict()
             return _infeasible(result, problem, count, reach)
         if reach is not None and reach.design is not None:
-            work.consider(basins.as_it_is(reach.design))
             work.polish(reach.design)
+            work.consider(basins.as_it_is(reach.design))
+    if not robust and _user_gave(problem):
+        if work.best is None:           # no polish got there: polish from the user's design
+            work.polish(given)
+        work.consider(basins.as_it_is(given))
+    if not robust and not any(r.feasible and r.ipopt_status in SUCCESS
+                              for r in result.starts):
+        # no polish converged: the best screened designs, checked exactly, are the answer's
+        # floor (a design the solve has seen is never better than what it returns)
+        ranked = sorted((c for c in screening.candidates if c.feasible), key=lambda c: c.score)
+        for candidate in ranked[:CHECKED_WHEN_STUCK]:
+            work.consider(basins.as_it_is(candidate.values))
     result.screening |= {"polished": work.polished, "distinct_optima": len(work.optima)}
     if robust:
         solver.checks_in_parallel = workers > 1
@@ -553,6 +567,13 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
     if reach is not None:
         result.reachable = reach.to_dict()
     return result
+
+
+def _user_gave(problem) -> bool:
+    """Whether the file gives a design of its own: every length fixed, or an initial value of
+    a free one (without any, the start is only the middle of the box)."""
+    free = [problem.design[k] for k in problem.free_lengths()]
+    return not free or any(v.initial is not None for v in free)
 
 
 def _reach(problem, count: int, binding, workers: int, known, timings: Timings):

@@ -103,6 +103,8 @@ def relaxed(problem, name: str):
 #: relaxed solves tried at most: each costs a multi-start solve, and one that is infeasible
 #: too costs a failed one
 MAX_RELAXED = 2
+#: polishes a relaxed solve may take at most (its screening's best basins and lines)
+RELAXED_STARTS = 4
 
 
 def reach_of(problem, count: int, binding: str | None, solve_phase, workers: int = 1,
@@ -125,6 +127,10 @@ def reach_of(problem, count: int, binding: str | None, solve_phase, workers: int
             break
         tried += 1
         variant, read, figure, side, bound, unit = found
+        # a verdict's search: the relaxed problem's best basins, not every start
+        variant = replace(variant, solver=replace(variant.solver,
+                                                  starts=min(variant.solver.starts,
+                                                             RELAXED_STARTS)))
         best = solve_phase(variant, count, workers=workers, explain=False)
         designs = ([best.design] if best.status == "optimal" else []) + list(known)
         reach = None

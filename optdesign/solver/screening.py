@@ -55,6 +55,8 @@ class Screening:
     seeds: list[Candidate] = field(default_factory=list)          # one per basin, best first
     radius: float = 0.0
     n_feasible: int = 0
+    #: the share of the box's assembling sample that breaks each constraint, by its name
+    missed: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return {"designs": len(self.candidates), "passed_filters": self.n_feasible,
@@ -76,14 +78,14 @@ def screen(problem, count: int, n_designs: int, extra: list[dict] = (),
         m = max(1, int(math.ceil(math.log2(max(n_designs, 2)))))
         rows += list(spread(sobol.random_base2(m)[:n_designs], lower, upper))
     X = np.array(rows).reshape(len(rows), len(free))
-    score, violation = _evaluate(problem, count, base, free, X, sampled)
+    missed: dict = {}
+    score, violation = sampled_scores(problem, count, base, free, X, sampled, missed)
     if free and sampled is None and not np.any(violation <= 0):
         X, score, violation = toward_feasible(problem, count, base, free, lower, upper,
                                               X, score, violation)
     feasible = violation <= 0
-    span = np.where(upper > lower, upper - lower, 1.0)
-    unit = (X - lower) / span
-    out = Screening(n_feasible=int(feasible.sum()))
+    unit = unit_of(X, lower, upper)
+    out = Screening(n_feasible=int(feasible.sum()), missed=missed)
     # Feasible designs first, by their score; then the others, by how far they miss
     # (Deb's rules: a rank, so scores and violations never mix units).
     order = np.lexsort((np.where(feasible, score, violation), ~feasible))
@@ -97,10 +99,22 @@ def screen(problem, count: int, n_designs: int, extra: list[dict] = (),
     return out
 
 
-#: a free length whose range spans at least this ratio (three decades) is sampled evenly in
-#: its logarithm: evenly in mm, nearly every design of a 1e-3..1e3 mm range would lie above
-#: 1 mm, and the basins at small lengths would go unseen
-LOG_SPAN = 1e3
+#: a free length whose range spans at least this ratio (two decades) is sampled evenly in
+#: its logarithm, and the basins' distances are measured there: evenly in mm, nearly every
+#: design of a 1e-3..1e3 mm range would lie above 1 mm, the basins at small lengths would go
+#: unseen, and every design of a linkage's size would fall within one critical distance
+LOG_SPAN = 1e2
+
+
+def unit_of(X: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Designs' positions in the unit box of the free lengths: the inverse of
+    :func:`spread` (logarithmic on a range of :data:`LOG_SPAN` or more)."""
+    span = np.where(upper > lower, upper - lower, 1.0)
+    out = (X - lower) / span
+    wide = upper >= LOG_SPAN * lower
+    if np.any(wide):
+        out[:, wide] = np.log(X[:, wide] / lower[wide]) / np.log(upper[wide] / lower[wide])
+    return out
 
 
 def spread(unit: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
@@ -115,7 +129,7 @@ def spread(unit: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray
 
 
 #: the feasibility stage: rounds of designs sampled around the least violating ones so far
-FEASIBILITY_ROUNDS = 8
+FEASIBILITY_ROUNDS = 24
 FEASIBILITY_BATCH = 256
 #: designs a round samples around, and the feasible designs that end the stage early
 ELITES = 16
@@ -144,7 +158,7 @@ def toward_feasible(problem, count: int, base: dict, free: list, lower, upper, X
     log_lo, log_hi = np.log(lower), np.log(upper)
     for _ in range(FEASIBILITY_ROUNDS + 1):
         if rows[-1] is not None and len(rows[-1]):
-            s, v = _evaluate(problem, count, base, free, rows[-1])
+            s, v = sampled_scores(problem, count, base, free, rows[-1])
             Xs.append(rows[-1]), scores.append(s), violations.append(v)
         every, v = np.vstack(Xs), np.concatenate(violations)
         if np.sum(v <= 0) >= ENOUGH_FEASIBLE:
@@ -187,11 +201,12 @@ def _relative_to_regulated(problem, base: dict, free: list, lower, upper, rng):
     return out
 
 
-def _evaluate(problem, count, base, free, X, sampled: dict | None = None
-              ) -> tuple[np.ndarray, np.ndarray]:
+def sampled_scores(problem, count, base, free, X, sampled: dict | None = None,
+                   missed: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(score, violation) of every design row of X: sampled objective, and the largest
     constraint violation (<= 0 when every filter passes; inf when it does not assemble);
-    ``sampled`` (if given) receives the sampled worst δ and ratio of each row."""
+    ``sampled`` (if given) receives the sampled worst δ and ratio of each row, ``missed`` the
+    share of the assembling rows that break each constraint, by its name."""
     model = problem.model
     S = X.shape[0]
     curves = count * len(STROKE_SIGNS[problem.stroke])
@@ -206,6 +221,7 @@ def _evaluate(problem, count, base, free, X, sampled: dict | None = None
                                               ANGLE_SLACK_DEG, 0.0))),
                     math.sqrt(1.0 - c.assembly_margin))
     violation = np.full(S, -np.inf)
+    angle_missed = np.full(S, -np.inf)
     ripples, ratio, envelope = [], None, {}
     with np.errstate(all="ignore"):
         for e in eccentricities_of(problem):
@@ -230,6 +246,7 @@ def _evaluate(problem, count, base, free, X, sampled: dict | None = None
             bad = ~np.isfinite(worst_cos) | ~np.all(np.isfinite(f), axis=(0, 2)) | \
                 (worst_cos > 1.0)
             violation = np.maximum(violation, np.where(bad, np.inf, worst_cos - cos_limit))
+            angle_missed = np.maximum(angle_missed, worst_cos - cos_limit)
         q = _Sampled(lengths, ratio, np.max(ripples, axis=0), peak * problem.input_speed,
                      sampled_quantities(problem, count, lengths, envelope))
         for criterion in constraints_of(problem):
@@ -238,7 +255,17 @@ def _evaluate(problem, count, base, free, X, sampled: dict | None = None
             lower, upper = criterion.bounds(problem)
             v = np.asarray(criterion.value(q), dtype=float)
             scale = max([1.0] + [abs(b) for b in (lower, upper) if math.isfinite(b)])
-            violation = np.maximum(violation, np.maximum(lower - v, v - upper) / scale)
+            broken = np.maximum(lower - v, v - upper) / scale
+            violation = np.maximum(violation, broken)
+            if missed is not None:
+                missed[criterion.name] = broken
+        if missed is not None:
+            missed.update({c.name: angle_missed for c in constraints_of(problem)
+                           if isinstance(c, TransmissionAngle)})
+            fine = np.isfinite(violation)
+            for name, broken in list(missed.items()):
+                broken = np.broadcast_to(np.asarray(broken, float), violation.shape)
+                missed[name] = float(np.mean(broken[fine] > 0)) if fine.any() else 0.0
         score = objective_of(problem).key(q)
         if sampled is not None:
             sampled.update(delta=np.asarray(q.worst_ripple, float),
@@ -371,7 +398,7 @@ def line_seeds(problem, count: int, values: dict) -> list[Candidate]:
             continue
         X = np.tile(centre, (LINE_POINTS, 1))
         X[:, j] = np.linspace(lower[j], upper[j], LINE_POINTS)
-        score, violation = _evaluate(problem, count, base, free, X)
+        score, violation = sampled_scores(problem, count, base, free, X)
         ok = violation <= 0
         s = np.where(ok, score, np.inf)
         step = span[j] / (LINE_POINTS - 1)

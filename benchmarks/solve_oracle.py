@@ -1,0 +1,115 @@
+"""The solver's verdicts against a brute-force oracle, on several hundred random problems.
+
+    python benchmarks/solve_oracle.py [--problems 300] [--seed 0] [--resume]
+
+Each problem is drawn by ``benchmarks/oracle.py`` (a mechanism, a box spanning one to six
+decades with or without initial values, a count, a stroke, random bounds on random quantities
+on either side or both, an objective minimised or maximised), solved by ``optdesign.solve``
+in-process, and judged against 4096 designs of its box per count, the most promising 48 and the
+file's own design checked by the exact evaluator: a false verdict is an ``optimal`` that a
+checked design beats (or whose design the exact check rejects), or an ``infeasible`` or
+``failed`` where a checked design meets every constraint. Writes
+``benchmarks/results/solve_oracle.{json,md}`` (rows kept as they come: ``--resume`` goes on
+from the rows written). Also measures the cost of a verdict: the disc problem's feasible solve
+against the same file at ``min_ratio: 34.4`` (a per-cent value, out of reach), each median of
+three in-process solves.
+"""
+from __future__ import annotations
+
+import argparse
+import copy
+import json
+import platform
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import oracle  # noqa: E402
+
+from optdesign.outputs.atomic import atomic_write_text  # noqa: E402
+from optdesign.problem.loader import problem_from_dict  # noqa: E402
+from optdesign.solver import solve  # noqa: E402
+
+RESULTS = Path(__file__).resolve().parent / "results"
+
+
+def verdict_cost(rounds: int = 3) -> dict:
+    """Median in-process solve time of the disc problem, feasible and at min_ratio 34.4."""
+    base = yaml.safe_load((oracle.ROOT / "problems" / "sharkov2022_disc.yaml").read_text())
+    far = copy.deepcopy(base)
+    far["objective"]["min_ratio"] = 34.4
+    out = {}
+    for label, data in (("feasible", base), ("min_ratio 34.4", far)):
+        times, status = [], None
+        for _ in range(rounds):
+            problem = problem_from_dict(copy.deepcopy(data), where="sharkov2022_disc.yaml")
+            t0 = time.perf_counter()
+            result = solve(problem)
+            times.append(time.perf_counter() - t0)
+            status = result.status
+        out[label] = {"seconds": statistics.median(times), "status": status,
+                      "message": result.message}
+    return out
+
+
+def table(rows: list[dict], cost: dict) -> str:
+    by = {}
+    for r in rows:
+        by.setdefault(r["mechanism"], []).append(r)
+    lines = ["Verdicts of `optdesign.solve` on random problems, each judged against a checked "
+             "sample of its box (`benchmarks/oracle.py`).", "",
+             "| mechanism | problems | optimal | infeasible | failed | false verdicts | "
+             "median solve [s] | boxes [decades] |", "|---|---|---|---|---|---|---|---|"]
+    for mech, rs in sorted(by.items()) + [("all", rows)]:
+        count = lambda s: sum(r["status"] == s for r in rs)  # noqa: E731
+        decades = [r["decades"] for r in rs]
+        lines.append(f"| {mech} | {len(rs)} | {count('optimal')} | {count('infeasible')} | "
+                     f"{count('failed')} | {sum(r['false'] for r in rs)} | "
+                     f"{statistics.median(r['solve_s'] for r in rs):.2f} | "
+                     f"{min(decades):.1f}–{max(decades):.1f} |")
+    false = [r for r in rows if r["false"]]
+    lines += ["", "| false verdict | problem | claim |", "|---|---|---|"]
+    lines += [f"| {r['status']} | {r['mechanism']} #{r['seed']} ({r['objective']}; "
+              f"{r['bounds'] or 'no bound'}) | {r['claims']} |" for r in false] or \
+        ["| none | | |"]
+    f, far = cost["feasible"], cost["min_ratio 34.4"]
+    lines += ["", "| the disc problem | status | solve [s] | / feasible |", "|---|---|---|---|",
+              f"| as shipped | {f['status']} | {f['seconds']:.2f} | 1.0× |",
+              f"| min_ratio: 34.4 | {far['status']} | {far['seconds']:.2f} | "
+              f"{far['seconds'] / f['seconds']:.1f}× |"]
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--problems", type=int, default=300)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--resume", action="store_true")
+    args = ap.parse_args(argv)
+    path = RESULTS / "solve_oracle.json"
+    rows = json.loads(path.read_text())["rows"] if args.resume and path.exists() else []
+    rng = np.random.default_rng(args.seed)
+    draws = [oracle.random_draw(rng, i) for i in range(args.problems)]
+    meta = {"time": time.strftime("%Y-%m-%d %H:%M:%S"), "python": platform.python_version(),
+            "machine": f"{platform.machine()} {platform.system()}", "seed": args.seed}
+    for draw in draws[len(rows):]:
+        rows.append(oracle.run(draw))
+        atomic_write_text(path, json.dumps({"meta": meta, "rows": rows}, indent=1))
+        r = rows[-1]
+        print(f"{len(rows):4d} {r['mechanism']:18s} {r['status']:10s} {r['solve_s']:7.2f} s "
+              f"false {r['false']} {r['claims']}", flush=True)
+    cost = verdict_cost()
+    atomic_write_text(path, json.dumps({"meta": meta, "rows": rows, "verdict_cost": cost},
+                                       indent=1))
+    atomic_write_text(RESULTS / "solve_oracle.md", table(rows, cost))
+    print(table(rows, cost))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

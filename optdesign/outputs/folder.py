@@ -96,7 +96,11 @@ class OutputFolder:
             raise ProblemError(f"{self.shown}: cannot create its parent folder "
                                f"({exc.strerror})") from None
         self._lock_fd = self._take_lock(self._sibling("lock"))
-        self._recover()
+        try:
+            self._recover()
+        except BaseException:           # refused, or a kill: the lock is not left behind
+            self.release()
+            raise
 
     def _take_lock(self, lock: Path) -> int:
         """The open, flocked and pid-stamped lock file: opened without following a link,
@@ -232,8 +236,13 @@ class OutputFolder:
                     self._discard(leftover)
         if self.path.is_dir():
             for entry in self.path.iterdir():
-                if _is_temporary(entry.name, self.owned):
-                    entry.unlink(missing_ok=True)
+                if not _is_temporary(entry.name, self.owned):
+                    continue
+                if entry.is_dir() and not entry.is_symlink():     # never one of ours
+                    raise ProblemError(f"{self.shown / entry.name}: is a folder where "
+                                       f"optdesign keeps a temporary file; remove it or "
+                                       f"choose another --out")
+                entry.unlink(missing_ok=True)
 
     def _discard(self, folder: Path) -> None:
         """Remove a sibling holding an old or unfinished set; a regular file in it that is

@@ -1,19 +1,75 @@
-"""Writes that fail: a folder planted under the name of one of optdesign's temporaries is
-refused in one line (exit 2), the lock not left."""
+"""Writes that fail: a disk that fills while a command writes its set leaves the earlier set
+whole and names the file it could not write in one line (exit 1); a folder planted under the
+name of one of optdesign's temporaries is refused in one line (exit 2), the lock not left."""
+import errno
 import os
+import subprocess
 
 import pytest
 
 from optdesign.cli import main
 from tests.conftest import ROOT
 
+TOLERANCE = ROOT / "problems" / "sharkov2022_disc_tolerance.yaml"
+PAPER = ROOT / "problems" / "sharkov2022.yaml"
 FREE = ROOT / "problems" / "sharkov2022_disc.yaml"
+
+
+def _snapshot(folder):
+    return {p.name: p.read_bytes() for p in folder.iterdir()}
 
 
 def _litter(folder):
     """Temporaries in the folder, and anything a run leaves beside it (its lock included)."""
     return ([p.name for p in folder.iterdir() if p.name.endswith(".tmp")]
             + [p.name for p in folder.parent.iterdir() if p.name.startswith(f".{folder.name}.")])
+
+
+@pytest.fixture
+def disk(tmp_path):
+    """A folder on a file system of 150 kB (a tmpfs), unmounted after the test."""
+    where = tmp_path / "disk"
+    where.mkdir()
+    mount = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=150k", "tmpfs", str(where)],
+                           capture_output=True)
+    if mount.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {mount.stderr.decode().strip()}")
+    yield where
+    subprocess.run(["umount", str(where)], check=False)
+
+
+def test_a_disk_full_during_tolerance_leaves_the_earlier_set_and_names_the_file(
+        disk, capsys, monkeypatch):
+    """The earlier set (about 90 kB) fits, the new one beside it does not: its figure is the
+    file that cannot be written."""
+    monkeypatch.chdir(disk)
+    argv = ["tolerance", str(TOLERANCE), "--out", "tol"]
+    assert main([*argv, "--samples", "200"]) == 0
+    earlier = _snapshot(disk / "tol")
+    capsys.readouterr()
+    assert main([*argv, "--samples", "300", "--seed", "5"]) == 1
+    assert capsys.readouterr().err == \
+        "optdesign tolerance: No space left on device: 'tol/tolerance.png'\n"
+    assert _snapshot(disk / "tol") == earlier and _litter(disk / "tol") == []
+
+
+def test_a_disk_full_during_export_leaves_the_earlier_set(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "out"
+    assert main(["export", str(PAPER), "--out", "out"]) == 0
+    earlier = _snapshot(out)
+    real = os.fsync
+
+    def full(fd):                                  # the second file of the set finds no room
+        if os.readlink(f"/proc/self/fd/{fd}").split("/")[-1].startswith(".linkage.svg."):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real(fd)
+    monkeypatch.setattr(os, "fsync", full)
+    capsys.readouterr()
+    assert main(["export", str(PAPER), "--out", "out", "--angle", "30"]) == 1
+    assert capsys.readouterr().err == \
+        "optdesign export: No space left on device: 'out/linkage.svg'\n"
+    assert _snapshot(out) == earlier and _litter(out) == []
 
 
 def test_a_folder_named_as_a_temporary_is_refused_and_the_lock_not_left(tmp_path, capsys):

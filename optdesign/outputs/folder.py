@@ -162,9 +162,13 @@ class OutputFolder:
                 self._exchange_in(staging, token)
             else:
                 self._commit_in_place(staging, token)
-        except BaseException:
+        except BaseException as exc:
             if staging.exists():
                 shutil.rmtree(staging, ignore_errors=True)
+            if isinstance(exc, OSError) and isinstance(exc.filename, str) and \
+                    Path(exc.filename).is_relative_to(staging):   # named as the user sees it
+                raise OSError(exc.errno, exc.strerror, str(
+                    self.shown / Path(exc.filename).relative_to(staging))) from None
             raise
         return [self.shown / Path(p).relative_to(staging) for p in written]
 
@@ -307,6 +311,15 @@ def _close_quietly(fd: int) -> None:
         os.close(fd)
     except OSError:
         pass
+
+
+def write_set(out: str | Path, owned: Iterable[str], write: Callable[[Path], list[Path]]
+              ) -> list[Path]:
+    """``write(folder)`` into a fresh folder, whose set then replaces the previous one of
+    ``out`` whole (:meth:`OutputFolder.replace_with`, one run at a time in ``out``): a
+    command that fails half-way (a disk full) leaves the earlier set as it was."""
+    with OutputFolder(out, owned) as folder:
+        return folder.replace_with(write)
 
 
 def _is_own_folder(path: Path) -> bool:

@@ -41,8 +41,9 @@ PACKAGE = Path(__file__).resolve().parents[1]
 _IMPORT_PREFIXES = ("PYTHON", "MPL", "OMP_", "OPENBLAS", "MKL_", "GOTO", "BLIS", "VECLIB",
                     "NUMEXPR", "CASADI", "LD_", "DASK", "TQDM_", "EZDXF", "OPTDESIGN_")
 _IMPORT_NAMES = ("HOME", "TZ", "TMPDIR", "XDG_CONFIG_HOME", "XDG_CACHE_HOME")
-#: variables of this package read when a command runs, not when it imports
-_RUN_ONLY = (VARIABLE, FOLDER_VARIABLE, IDLE_VARIABLE, "OPTDESIGN_PHASES")
+#: variables read when a command runs, not when it imports (this package's), or whose
+#: effect the child takes on from the client (the encoding of its standard streams)
+_RUN_ONLY = (VARIABLE, FOLDER_VARIABLE, IDLE_VARIABLE, "OPTDESIGN_PHASES", "PYTHONIOENCODING")
 #: the version of the messages between client and server (:mod:`optdesign.warm.wire`), part
 #: of the socket's name: a server of an older version is never reached, and ends when idle
 PROTOCOL = 2

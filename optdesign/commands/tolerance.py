@@ -4,9 +4,9 @@ tolerance?
 
 Needs a ``tolerances:`` section (:mod:`optdesign.tolerance.section`). Writes
 DIR/tolerance.json, DIR/tolerance.csv (one row per Monte Carlo part) and the histograms
-DIR/tolerance.png, the three replacing an earlier run's whole; default DIR is results/NAME/. Exit 0 when the analysis
-ran (parts that fail are reported, not an error); 1 when the nominal design itself does not
-assemble; 2 for bad input.
+DIR/tolerance.png, the three replacing an earlier run's whole; default DIR is results/NAME/.
+Exit 0 when the analysis ran (parts that fail are reported, not an error); 1 when the nominal
+design itself does not assemble; 2 for bad input.
 """
 from __future__ import annotations
 

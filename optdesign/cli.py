@@ -65,6 +65,8 @@ def main(argv: list[str] | None = None) -> int:
     """Run the command of ``argv``. Run as the program (``argv`` None), hand it to the warm
     server when one is listening (:mod:`optdesign.warm`), else run it here and start one."""
     if argv is None:
+        from optdesign.outputs import streams
+        streams.guard()                 # a closed or ASCII-only stream fails no result
         code = _delegated()
         if code is not None:
             phases.handed_over()

@@ -40,6 +40,7 @@ def die_with_parent(parent_pid: int | None = None) -> None:
     """
     parent_pid = parent_pid or os.getppid()
     try:        # not the parent's handler of :func:`exit_on_sigterm`: a worker just ends
+        # (even where the caller ignores SIGTERM: it is how its command ends it)
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
         # Ctrl-C reaches the whole process group: the parent unwinds and ends its workers;
         # a worker interrupted itself would print multiprocessing's "Process ForkProcess-1:"
@@ -155,8 +156,8 @@ def exit_on_sigterm():
     the exception of the SIGINT handler in force (``KeyboardInterrupt``), each recorded;
     leaving the block normally after one raises it again, as :func:`raise_if_terminated`
     does. The exception of a recorded signal that Python drops is not printed: it comes
-    back. A no-op when called from another thread, where Python cannot install signal
-    handlers."""
+    back. A signal the caller ignores (SIG_IGN) stays ignored. A no-op when called from
+    another thread, where Python cannot install signal handlers."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -174,7 +175,9 @@ def exit_on_sigterm():
         ctrl_c(signum, frame)
 
     _received.clear()
-    previous = signal.signal(signal.SIGTERM, handler)
+    previous = signal.getsignal(signal.SIGTERM)
+    if previous != signal.SIG_IGN:          # one the caller ignores stays ignored
+        signal.signal(signal.SIGTERM, handler)
     if callable(ctrl_c):
         signal.signal(signal.SIGINT, recorded)
     unraisable = sys.unraisablehook
@@ -182,7 +185,8 @@ def exit_on_sigterm():
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
         if callable(ctrl_c):
             signal.signal(signal.SIGINT, ctrl_c)
         sys.unraisablehook = unraisable

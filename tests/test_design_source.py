@@ -140,3 +140,15 @@ def test_a_long_name_still_makes_a_loadable_design_file(write_problem, tmp_path)
     assert code == 0
     fixed = load_problem(tmp_path / "out" / "design.yaml")
     assert len(fixed.name) == MAX_NAME_CHARS and fixed.name.endswith("_design")
+
+
+@pytest.mark.parametrize("key", ["l0", "phases"])
+def test_a_huge_integer_in_a_design_file_is_exit_2(tmp_path, capsys, key):
+    """JSON's integers have no bound: one of 400 digits is no length and no count."""
+    design = {"l0": 225, "l1": 20, "l2": 225, "l2_prime": 100, "l3": 56, "phases": 6}
+    path = tmp_path / "result.json"
+    path.write_text(json.dumps({"design": design | {key: 10 ** 400}}))
+    assert main(["analyze", str(ROOT / "problems" / "sharkov2022.yaml"), "--design",
+                 str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"design.{key} must be a positive number" in err, err

@@ -106,3 +106,16 @@ def test_a_ctrl_c_dropped_in_a_finaliser_comes_back_unprinted(capsys):
     assert reached == ["past the finaliser"]
     assert "Exception ignored" not in capsys.readouterr().err
     raise_if_terminated()                   # nothing left for a later block of the process
+
+
+def test_a_sigterm_the_caller_ignores_stays_ignored():
+    from optdesign.lifetime import exit_on_sigterm
+
+    kept = signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    try:
+        with exit_on_sigterm():
+            assert signal.getsignal(signal.SIGTERM) == signal.SIG_IGN
+            os.kill(os.getpid(), signal.SIGTERM)        # nothing happens
+        assert signal.getsignal(signal.SIGTERM) == signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGTERM, kept)

@@ -37,6 +37,7 @@ def run(args) -> int:
 
         from optdesign.errors import UsageError
         from optdesign.outputs.checks import prepare_out
+        from optdesign.outputs.folder import write_set
         from optdesign.problem.loader import load_problem  # noqa: F401  (read by loaded())
 
     with phase("reading"):
@@ -47,8 +48,9 @@ def run(args) -> int:
     names = ["animation.html", "animation.gif"] + (["animation.mp4"] if shutil.which("ffmpeg")
                                                    else [])
     out = prepare_out(args.out, problem.name, files=tuple(names))
-    written = write_animation(problem, out, args.eccentricity, args.frames,
-                              movies=tuple(n for n in names if not n.endswith(".html")))
+    written = write_set(out, names, lambda into: write_animation(
+        problem, into, args.eccentricity, args.frames,
+        movies=tuple(n for n in names if not n.endswith(".html"))))
     answered()
     print(f"design: {chosen.source}")
     print(f"wrote {', '.join(str(p) for p in written)}")

@@ -37,6 +37,7 @@ def run(args) -> int:
     from optdesign.errors import ProblemError, UsageError
     from optdesign.outputs.atomic import json_text
     from optdesign.outputs.checks import prepare_out
+    from optdesign.outputs.folder import write_set
     from optdesign.commands.files import write_accuracy
     from optdesign.problem.loader import load_problem
     from optdesign.outputs.units import stamped
@@ -61,7 +62,8 @@ def run(args) -> int:
     payload = stamped({"problem": problem.name, "reference": {
         "method": ref.method, **ref.figures.to_dict(), "crosscheck": ref.crosscheck},
         "rows": rows})
-    files = write_accuracy(payload, rows, problem, out, plot=not args.no_plot)
+    files = write_set(out, ("accuracy.json", "accuracy.png"), lambda into: write_accuracy(
+        payload, rows, problem, into, plot=not args.no_plot))
     if args.json:
         print(json_text(payload))
     else:

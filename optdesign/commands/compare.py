@@ -32,6 +32,7 @@ def run(args) -> int:
     from optdesign.figures.design import plot_envelopes
     from optdesign.outputs.atomic import atomic_write_text, json_text
     from optdesign.outputs.checks import prepare_out
+    from optdesign.outputs.folder import write_set
     from optdesign.outputs.units import stamped
     from optdesign.problem.loader import load_problem
 
@@ -44,13 +45,17 @@ def run(args) -> int:
     import pandas as pd
 
     table = pd.DataFrame(rows)
-    atomic_write_text(out / "compare.csv", table.to_csv(index=False, float_format="%.10g"))
     exact = {r["label"]: r.get("delta") for r in rows}
     curves = {(f"{label}: δ = {exact[label]:.6f} (exact, worst over its listed e)"
                if exact.get(label) is not None else label): curve
               for label, curve in envelopes(candidates).items()}
-    save_figure(plot_envelopes(curves, title="output speed over one crank turn, e = 1"),
-                out / "compare.png")
+
+    def write(into):
+        return [atomic_write_text(into / "compare.csv",
+                                  table.to_csv(index=False, float_format="%.10g")),
+                save_figure(plot_envelopes(curves, title="output speed over one crank turn, "
+                                                         "e = 1"), into / "compare.png")]
+    write_set(out, ("compare.csv", "compare.png"), write)
     if args.json:
         print(json_text(stamped({"designs": rows}, _units(candidates))))
     else:

@@ -293,6 +293,12 @@ def _checked(design: dict, problem, where: str) -> dict:
                 value = float(value)
             except ValueError:
                 pass
+        elif isinstance(value, int) and not isinstance(value, bool):
+            try:
+                value = float(value)
+            except OverflowError:           # JSON's integers have no bound; floats do
+                raise UsageError(f"{where}: design.{key} must be a positive number (got an "
+                                 f"integer of {value.bit_length()} bits)") from None
         if isinstance(value, bool) or not isinstance(value, (int, float)) or \
                 not math.isfinite(value) or value <= 0:
             raise UsageError(f"{where}: design.{key} must be a positive number "

@@ -32,7 +32,6 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     with phase("imports"):
-        import io
         import math
 
         import scipy.optimize  # noqa: F401  (brentq, first used by the evaluation)
@@ -40,8 +39,8 @@ def run(args) -> int:
         from optdesign.analyses.analyze import analyze
         from optdesign.errors import UsageError
         from optdesign.evaluation.design import Design
-        from optdesign.outputs.atomic import atomic_write_text
         from optdesign.outputs.checks import prepare_out
+        from optdesign.outputs.folder import write_set
         from optdesign.problem.loader import load_problem  # noqa: F401  (read by loaded())
 
     with phase("reading"):
@@ -59,6 +58,21 @@ def run(args) -> int:
         design = Design.from_problem(problem)
         design.check_assembly(args.eccentricity)      # AssemblyError: exit 1, names the chain
         result = analyze(problem)
+    owned = tuple(FORMATS[f] for f in formats)
+    written = write_set(out, owned, lambda into: _write(problem, design, result, args,
+                                                         formats, into))
+    answered()
+    print(f"design: {chosen.source}")
+    print(f"wrote {', '.join(str(p) for p in written)}")
+    return 0
+
+
+def _write(problem, design, result, args, formats, out) -> list:
+    """The files of ``formats``, into the folder ``out``."""
+    import io
+
+    from optdesign.outputs.atomic import atomic_write_text
+
     written = []
     with phase("files"):
         if "dxf" in formats or "svg" in formats:
@@ -81,10 +95,7 @@ def run(args) -> int:
                                  args.eccentricity)
             written.append(atomic_write_text(out / FORMATS["csv"],
                                              table.to_csv(index=False, float_format="%.12g")))
-    answered()
-    print(f"design: {chosen.source}")
-    print(f"wrote {', '.join(str(p) for p in written)}")
-    return 0
+    return written
 
 
 def _title(problem, design, result, args) -> dict:

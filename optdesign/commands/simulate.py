@@ -44,6 +44,7 @@ def run(args) -> int:
         from optdesign.outputs.atomic import json_text
         from optdesign.outputs.checks import prepare_out
         from optdesign.outputs.figure_process import FigureProcess
+        from optdesign.outputs.folder import write_set
         from optdesign.problem.loader import load_problem  # noqa: F401  (read by loaded())
         from optdesign.commands.files import draw_simulation, write_simulation
 
@@ -56,9 +57,7 @@ def run(args) -> int:
         raise UsageError(f"--cycles must be at least 1 (got {overrides['cycles']})")
     if overrides.get("cycles", 1) > MAX_CYCLES:
         raise UsageError(f"--cycles must be at most {MAX_CYCLES} (got {overrides['cycles']})")
-    out = prepare_out(args.out, problem.name, files=(
-        "dynamics.json", "dynamics_cycle.csv", "dynamics_angles.png", "dynamics_speeds.png",
-        "dynamics_loads.png"))
+    out = prepare_out(args.out, problem.name, files=SIMULATE_FILES)
     section = replace(section, **overrides)
     # the figures' process imports matplotlib while this one integrates
     with FigureProcess(warm=warm_up) as figures:
@@ -72,12 +71,15 @@ def run(args) -> int:
                 result = simulate(problem, section, method=args.method, progress=bar.update)
         except SolveError as exc:
             return _failed(problem, section, args, out, exc)
-        with phase("files"):
-            write_simulation(result, out, plots=False)
-            print_answer(json_text(chosen.stamped(result.to_dict())) if args.json else
-                         f"design: {chosen.source}\n{format_result(result)}")
-        with phase("figures"):
-            draw_simulation(result, out, figures)
+
+        def write(into):
+            with phase("files"):
+                written = write_simulation(result, into, plots=False)
+                print_answer(json_text(chosen.stamped(result.to_dict())) if args.json else
+                             f"design: {chosen.source}\n{format_result(result)}")
+            with phase("figures"):
+                return written + draw_simulation(result, into, figures)
+        write_set(out, SIMULATE_FILES, write)      # the earlier set, or this one whole
     raise_if_unprinted()
     if not args.json:
         print(f"wrote {out}/dynamics.json, dynamics_cycle.csv, dynamics_angles.png, "
@@ -93,16 +95,22 @@ def _failed(problem, section, args, out, exc) -> int:
     from optdesign.dynamics.integrator import StallError
     from optdesign.dynamics.result import failure_dict
     from optdesign.outputs.atomic import atomic_write_json, json_text
+    from optdesign.outputs.folder import write_set
 
     data = failure_dict(problem, section, args.method or section.method,
                         "stalled" if isinstance(exc, StallError) else "failed", str(exc))
-    atomic_write_json(out / "dynamics.json", data)
+    # its set is dynamics.json alone: no cycle or figure of an earlier run stays beside it
+    write_set(out, SIMULATE_FILES, lambda into: [atomic_write_json(into / "dynamics.json",
+                                                                   data)])
     if args.json:
         print(json_text(data))
     print(f"optdesign: {problem.source}: {exc}", file=sys.stderr)
     return 1
 
 
+#: the files of a simulation, replaced together
+SIMULATE_FILES = ("dynamics.json", "dynamics_cycle.csv", "dynamics_angles.png",
+                  "dynamics_speeds.png", "dynamics_loads.png")
 STATUS_TEXT = {"steady": "steady", "not_steady": "NOT steady", "stalled": "STALLED"}
 
 

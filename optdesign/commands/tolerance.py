@@ -4,9 +4,9 @@ tolerance?
 
 Needs a ``tolerances:`` section (:mod:`optdesign.tolerance.section`). Writes
 DIR/tolerance.json, DIR/tolerance.csv (one row per Monte Carlo part) and the histograms
-DIR/tolerance.png, each atomically; default DIR is results/NAME/. Exit 0 when the analysis
-ran (parts that fail are reported, not an error); 1 when the nominal design itself does not
-assemble; 2 for bad input.
+DIR/tolerance.png, the three replacing an earlier run's whole; default DIR is results/NAME/.
+Exit 0 when the analysis ran (parts that fail are reported, not an error); 1 when the nominal
+design itself does not assemble; 2 for bad input.
 """
 from __future__ import annotations
 
@@ -42,6 +42,7 @@ def run(args) -> int:
         from optdesign.outputs.atomic import json_text
         from optdesign.outputs.checks import prepare_out
         from optdesign.outputs.figure_process import FigureProcess
+        from optdesign.outputs.folder import write_set
         from optdesign.commands.files import TOLERANCE_FILES, draw_tolerance, write_tolerance
         from optdesign.problem.loader import load_problem
         from optdesign.tolerance.parts import box_of
@@ -91,11 +92,14 @@ def run(args) -> int:
                 bar.update()
             doc = tolerance_document(problem, box, section, frame, worst_delta, worst_angle,
                                      source)
-        with phase("files"):
-            files = write_tolerance(doc, frame, out, plots=False)
-            print_answer(json_text(doc) if args.json else format_tolerance(doc))
-        with phase("figures"):
-            files += draw_tolerance(doc, frame, out, figures)
+
+        def write(into):
+            with phase("files"):
+                written = write_tolerance(doc, frame, into, plots=False)
+                print_answer(json_text(doc) if args.json else format_tolerance(doc))
+            with phase("figures"):
+                return written + draw_tolerance(doc, frame, into, figures)
+        files = write_set(out, TOLERANCE_FILES, write)      # the earlier set, or this one
     raise_if_unprinted()
     if not args.json:
         print(f"wrote {', '.join(str(f) for f in files)}")

@@ -103,7 +103,11 @@ class OutputFolder:
             raise ProblemError(f"{self.shown}: cannot create its parent folder "
                                f"({exc.strerror})") from None
         self._lock_fd = self._take_lock(self._sibling("lock"))
-        self._recover()
+        try:
+            self._recover()
+        except BaseException:           # refused, or a kill: the lock is not left behind
+            self.release()
+            raise
 
     def _take_lock(self, lock: Path) -> int:
         """The open, flocked and pid-stamped lock file: opened without following a link,
@@ -166,9 +170,13 @@ class OutputFolder:
                 self._exchange_in(staging, token)
             else:
                 self._commit_in_place(staging, token)
-        except BaseException:
+        except BaseException as exc:
             if staging.exists():
                 shutil.rmtree(staging, ignore_errors=True)
+            if isinstance(exc, OSError) and isinstance(exc.filename, str) and \
+                    Path(exc.filename).is_relative_to(staging):   # named as the user sees it
+                raise OSError(exc.errno, exc.strerror, str(
+                    self.shown / Path(exc.filename).relative_to(staging))) from None
             raise
         return [self.shown / Path(p).relative_to(staging) for p in written]
 
@@ -240,8 +248,13 @@ class OutputFolder:
                     self._discard(leftover)
         if self.path.is_dir():
             for entry in self.path.iterdir():
-                if _is_temporary(entry.name, self.owned):
-                    entry.unlink(missing_ok=True)
+                if not _is_temporary(entry.name, self.owned):
+                    continue
+                if entry.is_dir() and not entry.is_symlink():     # never one of ours
+                    raise ProblemError(f"{self.shown / entry.name}: is a folder where "
+                                       f"optdesign keeps a temporary file; remove it or "
+                                       f"choose another --out")
+                entry.unlink(missing_ok=True)
 
     def _discard(self, folder: Path) -> None:
         """Remove a sibling holding an old or unfinished set; a regular file in it that is
@@ -306,6 +319,15 @@ def _close_quietly(fd: int) -> None:
         os.close(fd)
     except OSError:
         pass
+
+
+def write_set(out: str | Path, owned: Iterable[str], write: Callable[[Path], list[Path]]
+              ) -> list[Path]:
+    """``write(folder)`` into a fresh folder, whose set then replaces the previous one of
+    ``out`` whole (:meth:`OutputFolder.replace_with`, one run at a time in ``out``): a
+    command that fails half-way (a disk full) leaves the earlier set as it was."""
+    with OutputFolder(out, owned) as folder:
+        return folder.replace_with(write)
 
 
 def _is_own_folder(path: Path) -> bool:

@@ -4,12 +4,13 @@ the command as the program does.
 From the server it keeps only its imported modules. From the client it takes everything a
 command can read: its standard input, output and error (the descriptors themselves, so a
 terminal stays a terminal and a pipe a pipe), its working folder (as a descriptor: a folder
-renamed meanwhile is still the one the user was in), its environment, umask and resource
-limits, its program name and arguments, and the encoding of its streams. It leads a process
-group of its own, which the client sends Ctrl-C and the other signals to, and it resets every
-signal handler and descriptor of the server. A thread watches the connection: if the client
-dies, the group gets SIGTERM (a ``solve`` in progress unwinds and removes its unfinished set,
-:func:`optdesign.lifetime.exit_on_sigterm`).
+renamed meanwhile is still the one the user was in), its environment (and the locale it names),
+umask and resource limits, its program name and arguments, and the encoding of its streams. It
+leads a process group of its own, which the client sends Ctrl-C and the other signals to; it
+resets every signal handler and descriptor of the server and takes on the client's signal
+dispositions (a signal the caller ignored stays ignored) and blocked signals. A thread watches
+the connection: if the client dies, the group gets SIGTERM (a ``solve`` in progress unwinds and
+removes its unfinished set, :func:`optdesign.lifetime.exit_on_sigterm`).
 """
 from __future__ import annotations
 
@@ -39,11 +40,17 @@ class Program(NamedTuple):
 def run(request: dict, fds: list[int], conn: socket.socket, inherited: list[int],
         program: Program) -> None:
     """Take on the client's process state and run its command with ``program``; never
-    returns. If the state cannot be taken on, the client is told to run the command
-    itself."""
+    returns. It starts only on the client's ``go`` (a client that gave up waiting runs the
+    command itself: this child then ends, having done nothing). If the state cannot be taken
+    on, the client is told to run the command itself."""
     try:
-        _adopt(request, fds, inherited)
+        _adopt(request, fds, inherited)      # nothing run yet: the client's handlers in force
+        if not _go(conn):
+            os._exit(0)
         _watch(conn)
+    except KeyboardInterrupt:            # Ctrl-C before the command started, as run alone
+        print("optdesign: interrupted", file=sys.stderr, flush=True)
+        os._exit(128 + signal.SIGINT)
     except BaseException:               # noqa: BLE001 - whatever it is, the client runs it
         try:
             conn.sendall(b"cold\n")
@@ -63,6 +70,22 @@ def run(request: dict, fds: list[int], conn: socket.socket, inherited: list[int]
         program.exit_now(1)
 
 
+def _go(conn: socket.socket) -> bool:
+    """Wait for the client's ``go``; False when it closed instead. No deadline: the client
+    decides, and its end closes when it dies."""
+    conn.settimeout(None)
+    word = b""
+    try:
+        while len(word) < len(wire.GO):
+            chunk = conn.recv(len(wire.GO) - len(word))
+            if not chunk:
+                return False
+            word += chunk
+    except OSError:
+        return False
+    return word == wire.GO
+
+
 def _exit_code(code) -> int:
     """The exit code of ``sys.exit(code)``: None is 0, a number itself, anything else is
     printed on stderr and is 1."""
@@ -80,9 +103,7 @@ def _adopt(request: dict, fds: list[int], inherited: list[int]) -> None:
     for fd in inherited:
         _close(fd)
     signal.set_wakeup_fd(-1)
-    signal.signal(signal.SIGINT, signal.default_int_handler)
-    for signum in (signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT, signal.SIGCHLD):
-        signal.signal(signum, signal.SIG_DFL)
+    _signals(request.get("signals") or {})
     try:
         os.setpgid(0, 0)                 # the server has made it so already, or will
     except OSError:
@@ -99,9 +120,42 @@ def _adopt(request: dict, fds: list[int], inherited: list[int]) -> None:
     os.environ.update({str(k): str(v) for k, v in request["environment"].items()})
     if "tempfile" in sys.modules:
         sys.modules["tempfile"].tempdir = None       # found again from TMPDIR
+    _locale()
     _streams(request.get("streams") or [None, None, None])
     from optdesign.outputs import phases
     phases.restart(float(request["started"]))
+
+
+def _signals(state: dict) -> None:
+    """The server's handlers undone, and the client's dispositions taken on: a signal its
+    caller ignores (``nohup``'s SIGHUP, a background job's SIGINT) is ignored here and in
+    every process the command forks, as it would be in the program run alone; its blocked
+    signals stay blocked."""
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    for signum in (signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT, signal.SIGCHLD):
+        signal.signal(signum, signal.SIG_DFL)
+    for signum in state.get("ignored", []):
+        try:
+            signal.signal(int(signum), signal.SIG_IGN)
+        except (OSError, ValueError, TypeError):    # SIGKILL, SIGSTOP: never ignored
+            pass
+    blocked = set()
+    for signum in state.get("blocked", []):
+        if isinstance(signum, int) and 0 < signum < signal.NSIG:
+            blocked.add(signum)
+    signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
+
+
+def _locale() -> None:
+    """The client's character type locale, set from its environment as Python sets it at
+    start-up (the encodings that depends on are the server's own: the fingerprint holds
+    them, :func:`optdesign.warm.place.text_encodings`)."""
+    import locale
+
+    try:
+        locale.setlocale(locale.LC_CTYPE, "")
+    except locale.Error:                # an unknown locale: C, as Python falls back
+        locale.setlocale(locale.LC_CTYPE, "C")
 
 
 def _limit(limits: dict) -> None:

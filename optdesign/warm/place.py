@@ -5,16 +5,17 @@ The socket lives in a folder only this user can enter: ``$OPTDESIGN_SERVER_DIR``
 folder is created with mode 0700 and used only when it is a real folder (not a link), owned by
 this user and closed to everyone else; otherwise there is no server and every command runs in
 its own process. One server serves one installation: the socket's name is a checksum of the
-package's folder and the interpreter.
+package's folder, the interpreter and the version of the messages.
 
 A command hands its work to the server only when the server's **fingerprint** equals its own:
-the interpreter, its version and options (``-X``, ``-W``), the import path with each folder's
-modification time (an installed or upgraded package changes its folder's), the modification
-time and size of every file of the package, and the environment variables read as libraries
-are imported (BLAS threads, matplotlib's, locale, Python's own, ``OPTDESIGN_*``). Anything else a command reads
-(the rest of the environment, the working folder, the umask, the resource limits) the child
-takes from the client (:mod:`optdesign.warm.child`). This module imports the standard library
-only: the client runs it before anything else.
+the interpreter, its version and options (``-X``, ``-W``), the encodings it fixed as it started
+(file names' and ``open``'s default), the import path with each folder's modification time (an
+installed or upgraded package changes its folder's), the modification time and size of every
+file of the package, and the environment variables read as libraries are imported (BLAS
+threads, matplotlib's, Python's own, ``OPTDESIGN_*``). Anything else a command reads (the rest
+of the environment, the locale, the working folder, the umask, the resource limits, the signals
+ignored) the child takes from the client (:mod:`optdesign.warm.child`). This module imports the
+standard library only: the client runs it before anything else.
 """
 from __future__ import annotations
 
@@ -38,11 +39,14 @@ _ON, _OFF = {"", "on", "1", "yes", "true"}, {"off", "0", "no", "false"}
 PACKAGE = Path(__file__).resolve().parents[1]
 #: variables read while the libraries are imported (by prefix, and by name)
 _IMPORT_PREFIXES = ("PYTHON", "MPL", "OMP_", "OPENBLAS", "MKL_", "GOTO", "BLIS", "VECLIB",
-                    "NUMEXPR", "CASADI", "LD_", "DASK", "LC_", "LANG", "TQDM_", "EZDXF",
-                    "OPTDESIGN_")
+                    "NUMEXPR", "CASADI", "LD_", "DASK", "TQDM_", "EZDXF", "OPTDESIGN_")
 _IMPORT_NAMES = ("HOME", "TZ", "TMPDIR", "XDG_CONFIG_HOME", "XDG_CACHE_HOME")
-#: variables of this package read when a command runs, not when it imports
-_RUN_ONLY = (VARIABLE, FOLDER_VARIABLE, IDLE_VARIABLE, "OPTDESIGN_PHASES")
+#: variables read when a command runs, not when it imports (this package's), or whose
+#: effect the child takes on from the client (the encoding of its standard streams)
+_RUN_ONLY = (VARIABLE, FOLDER_VARIABLE, IDLE_VARIABLE, "OPTDESIGN_PHASES", "PYTHONIOENCODING")
+#: the version of the messages between client and server (:mod:`optdesign.warm.wire`), part
+#: of the socket's name: a server of an older version is never reached, and ends when idle
+PROTOCOL = 2
 #: the longest path of a Unix socket (``sun_path`` holds 108 bytes with its final NUL)
 _SOCKET_PATH_MAX = 107
 
@@ -107,7 +111,7 @@ def socket_path(env=os.environ) -> Path | None:
     """The socket of this installation's server, or None where there can be none (no
     private folder; a path too long for a Unix socket)."""
     where = folder(env)
-    key = f"{PACKAGE}\0{sys.executable}".encode("utf-8", "surrogateescape")
+    key = f"{PACKAGE}\0{sys.executable}\0{PROTOCOL}".encode("utf-8", "surrogateescape")
     path = where / f"{zlib.crc32(key):08x}{zlib.adler32(key):08x}.sock"
     if len(os.fsencode(path)) > _SOCKET_PATH_MAX:
         return None
@@ -124,10 +128,25 @@ def fingerprint(env=os.environ) -> str:
             paths.append([entry, None])
     names = {k: v for k, v in env.items()
              if (k.startswith(_IMPORT_PREFIXES) or k in _IMPORT_NAMES) and k not in _RUN_ONLY}
-    return json.dumps({"python": [sys.executable, sys.version, list(sys.flags),
-                                  sys.warnoptions, sys._xoptions], "path": paths,
-                       "package": [str(PACKAGE), _package_sum()], "environment": names},
-                      sort_keys=True)
+    # UTF-8 mode is no flag of its own here: the C locale turns it on in a command and not in
+    # the server the command starts (the command hands on LC_CTYPE=C.UTF-8, coerced), so
+    # the encodings it decides are compared instead
+    flags = [value for name, value in zip(type(sys.flags).__match_args__, sys.flags)
+             if name != "utf8_mode"]
+    return json.dumps({"python": [sys.executable, sys.version, flags, sys.warnoptions,
+                                  sys._xoptions], "encodings": text_encodings(),
+                       "path": paths, "package": [str(PACKAGE), _package_sum()],
+                       "environment": names}, sort_keys=True)
+
+
+def text_encodings() -> list[str]:
+    """The encodings fixed as the interpreter starts, which a child cannot take on from its
+    client: file names' (and their error handler), and the default of ``open``."""
+    import codecs
+    import locale
+
+    return [codecs.lookup(sys.getfilesystemencoding()).name, sys.getfilesystemencodeerrors(),
+            codecs.lookup(locale.getpreferredencoding(False)).name]
 
 
 def _package_sum() -> int:

@@ -8,8 +8,10 @@ start_server`), in a session of its own, in ``/``, its standard streams on ``/de
    import as they run, and draws matplotlib's first figure (the fonts);
 3. listens on its socket (mode 0600, in the private folder of :mod:`optdesign.warm.place`),
    answering only processes of its own user;
-4. forks one child per ``run`` request (:mod:`optdesign.warm.child`), tells the client the
-   child's pid, and when the child ends, its exit code;
+4. reads each request as its bytes arrive, every connection with a deadline of its own
+   (:data:`REQUEST_TIMEOUT_S`), so a slow, stopped or idle client delays no other; forks one
+   child per ``run`` request (:mod:`optdesign.warm.child`), tells the client the child's
+   pid, and when the child ends, its exit code;
 5. ends after ``OPTDESIGN_SERVER_IDLE`` seconds (15 minutes) without a command, on SIGTERM,
    on ``optdesign server stop``, or at a request whose fingerprint is not its own (its files
    or environment changed: it is stale). It first stops listening and gives up its lock, so
@@ -31,8 +33,12 @@ import time
 
 from optdesign.warm import child, place, wire
 
-#: seconds a client has to send its request
-REQUEST_TIMEOUT_S = 5.0
+#: seconds a client has, from its connection, to send its whole request
+REQUEST_TIMEOUT_S = 3.0
+#: connections whose request is still arriving; beyond, the oldest is dropped
+MAX_PENDING = 64
+#: seconds an answer (a line) may take to leave: a client that does not read is dropped
+ANSWER_TIMEOUT_S = 2.0
 #: libraries the commands import inside their functions (the package's modules are walked)
 LIBRARIES = ("numpy", "casadi", "yaml", "scipy.optimize", "scipy.stats", "scipy.integrate",
              "scipy.special", "pandas", "tqdm", "matplotlib.pyplot", "PIL.Image", "ezdxf",
@@ -133,6 +139,8 @@ class Server:
         self.inode = os.lstat(path).st_ino
         self.program = program
         self.children: dict[int, socket.socket] = {}
+        #: connections whose request is arriving: their reader and deadline, oldest first
+        self.pending: dict[socket.socket, tuple[wire.RequestReader, float]] = {}
         self.started = time.time()
         self.last = time.monotonic()
         self.selector = selectors.DefaultSelector()
@@ -151,17 +159,27 @@ class Server:
         self.selector.register(wake_r, selectors.EVENT_READ)
         try:
             while self.listener is not None or self.children:
-                idle_left = self.last + self.idle_s - time.monotonic()
-                if not self.children and idle_left <= 0:
+                now = time.monotonic()
+                idle_left = self.last + self.idle_s - now
+                if not self.children and not self.pending and idle_left <= 0:
                     break
-                for key, _ in self.selector.select(None if self.children else idle_left):
+                waits = [d - now for _, d in self.pending.values()]
+                if not self.children:
+                    waits.append(idle_left)
+                timeout = max(0.0, min(waits)) if waits else None
+                for key, _ in self.selector.select(timeout):
                     if key.fd == wake_r:
                         _drain(wake_r)
-                    elif self.listener is not None:
+                    elif key.fileobj is self.listener:
                         self._accept()
+                    elif key.fileobj in self.pending:
+                        self._read(key.fileobj)
+                self._expire()
                 self._reap()
         finally:
             self.stop_listening()
+            for conn in list(self.pending):
+                self._drop(conn)
 
     def stop_listening(self) -> None:
         """Take no more commands, give up the socket and the lock (a new server may start);
@@ -177,26 +195,75 @@ class Server:
         self.listener.close()
         self.listener = None
         os.close(self.lock)
+        for conn in list(self.pending):      # their clients run their commands themselves
+            self._drop(conn)
 
     # ------------------------------------------------------------------ one connection
+    # A request is read as its bytes arrive, each connection with a deadline of its own:
+    # a client that is slow, stopped or silent is dropped and never delays another.
     def _accept(self) -> None:
-        try:
-            conn, _ = self.listener.accept()
-        except (BlockingIOError, InterruptedError):
-            return
-        conn.setblocking(True)
-        conn.settimeout(REQUEST_TIMEOUT_S)
-        try:
-            _, uid, _ = _UCRED.unpack(conn.getsockopt(socket.SOL_SOCKET, socket.SO_PEERCRED,
-                                                      _UCRED.size))
+        while self.listener is not None:
+            try:
+                conn, _ = self.listener.accept()
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError:                  # out of descriptors: the next select retries
+                return
+            try:
+                _, uid, _ = _UCRED.unpack(conn.getsockopt(
+                    socket.SOL_SOCKET, socket.SO_PEERCRED, _UCRED.size))
+            except OSError:
+                uid = -1
             if uid != os.getuid():
-                raise ValueError("another user")
-            request, fds = wire.receive_request(conn)
+                conn.close()
+                continue
+            conn.setblocking(False)
+            try:
+                conn.send(wire.READY)
+            except OSError:
+                conn.close()
+                continue
+            if len(self.pending) >= MAX_PENDING:
+                self._drop(next(iter(self.pending)))
+            self.pending[conn] = (wire.RequestReader(conn),
+                                  time.monotonic() + REQUEST_TIMEOUT_S)
+            self.selector.register(conn, selectors.EVENT_READ)
+
+    def _read(self, conn: socket.socket) -> None:
+        reader, _ = self.pending[conn]
+        try:
+            request = reader.feed()
         except (OSError, ValueError):
-            conn.close()
+            self._drop(conn)
             return
+        if request is None:
+            return
+        del self.pending[conn]
+        self.selector.unregister(conn)
+        conn.setblocking(True)
+        conn.settimeout(ANSWER_TIMEOUT_S)
+        self._answer(request, reader.fds, conn)
+
+    def _expire(self) -> None:
+        now = time.monotonic()
+        for conn in [c for c, (_, deadline) in self.pending.items() if deadline <= now]:
+            self._drop(conn)
+
+    def _drop(self, conn: socket.socket) -> None:
+        """Close a connection whose request never came whole (and what it carried)."""
+        reader, _ = self.pending.pop(conn, (None, None))
+        if reader is not None:
+            reader.close()
+        try:
+            self.selector.unregister(conn)
+        except (KeyError, ValueError):
+            pass
+        conn.close()
+
+    def _answer(self, request: dict, fds: list[int], conn: socket.socket) -> None:
         kind = request.get("kind")
-        if kind == "run" and request.get("fingerprint") == self.fingerprint:
+        if kind == "run" and request.get("fingerprint") == self.fingerprint and \
+                self.listener is not None:
             self._fork(request, fds, conn)
             return
         for fd in fds:
@@ -223,8 +290,11 @@ class Server:
                            "fingerprint": self.fingerprint}).encode()
 
     def _fork(self, request: dict, fds: list[int], conn: socket.socket) -> None:
-        inherited = [*self.wake, self.lock, self.selector.fileno(), self.listener.fileno(),
-                     *(c.fileno() for c in self.children.values())]
+        inherited = [*self.wake, self.lock, self.selector.fileno(),
+                     *([self.listener.fileno()] if self.listener is not None else []),
+                     *(c.fileno() for c in self.children.values()),
+                     *(c.fileno() for c in self.pending),
+                     *(fd for reader, _ in self.pending.values() for fd in reader.fds)]
         pid = os.fork()
         if pid == 0:                     # the child never returns into the loop
             try:

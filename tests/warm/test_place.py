@@ -17,11 +17,13 @@ def test_the_fingerprint_follows_the_files_and_the_variables_read_at_import(tmp_
     first = place.fingerprint(env)
     assert place.fingerprint(dict(env)) == first
     # read when a command runs, not when the libraries are imported: the same server serves
+    # (the locale and the streams' encoding too: the child takes them on from the client)
     for k, v in {"PATH": "/bin", "OPTDESIGN_PHASES": "/tmp/x", "OPTDESIGN_SERVER": "on",
-                 "COLUMNS": "80"}.items():
+                 "COLUMNS": "80", "LANG": "C", "LC_ALL": "C.UTF-8",
+                 "PYTHONIOENCODING": "ascii"}.items():
         assert place.fingerprint(env | {k: v}) == first, k
     for k, v in {"OMP_NUM_THREADS": "1", "MPLBACKEND": "svg", "PYTHONPATH": "/x",
-                 "LANG": "C", "OPTDESIGN_OTHER": "1"}.items():
+                 "OPTDESIGN_OTHER": "1"}.items():
         assert place.fingerprint(env | {k: v}) != first, k
     st = source.stat()
     os.utime(source, ns=(st.st_atime_ns, st.st_mtime_ns + 1))

@@ -4,7 +4,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test bench docs docs-quick clean
+.PHONY: run test bench docs docs-quick docs-site clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -57,5 +57,11 @@ docs-quick: $(STAMP)
 	$(PY) benchmarks/figure_cost.py
 	$(PY) benchmarks/docs.py --splice
 
+# The documentation site (docs/ and the API reference from the docstrings, mkdocs.yml) in site/:
+# open site/index.html. Built offline, with --strict: a broken link, a missing page or a
+# docstring mkdocstrings cannot read is an error (tests/test_docs_site.py builds it in make test).
+docs-site: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --site-dir site
+
 clean:
-	rm -rf $(VENV) .pytest_cache results/*/
+	rm -rf $(VENV) .pytest_cache results/*/ site/

@@ -8,7 +8,7 @@ takes ~40 s):
 Writes OUT/accuracy.png (the paper's design, problems/sharkov2022.yaml, plus full solves of
 problems/sharkov2022_disc.yaml), OUT/accuracy_optimum.png (the same evaluators at the disc
 problem's optimum) and OUT/accuracy.json (every row), prints both tables, and writes the
-tables docs/accuracy.md and README.md show to benchmarks/results/accuracy.{md,json}
+tables docs/accuracy.md and docs/benchmarks.md show to benchmarks/results/accuracy.{md,json}
 (spliced into the pages by ``python benchmarks/docs.py --splice``).
 """
 from __future__ import annotations
@@ -93,7 +93,7 @@ def solve_table(rows: list[dict]) -> list[str]:
     return out
 
 
-#: the README's rows: (method, N, ρ) -> its name there; the surrogate at the solve's defaults
+#: the rows docs/benchmarks.md shows: (method, N, ρ) -> its name there; the surrogate at the solve's defaults
 README_ROWS = {("sampled", 90, None): "sampled envelope", ("sampled", 16384, None):
                "sampled envelope", ("exact", 1024, None): "exact evaluator (grid)",
                ("lse", 90, 200.0): "plain log-sum-exp",
@@ -101,7 +101,7 @@ README_ROWS = {("sampled", 90, None): "sampled envelope", ("sampled", 16384, Non
 
 
 def readme_table(rows: list[dict]) -> list[str]:
-    """The few rows the README shows of the paper's design."""
+    """The few rows docs/benchmarks.md shows of the paper's design."""
     out = ["| method | N | ρ | δ error | ratio error | time |", "|---|---|---|---|---|---|"]
     for r in rows:
         name = README_ROWS.get((r["method"], r["samples"], r.get("smoothing")))
@@ -114,7 +114,7 @@ def readme_table(rows: list[dict]) -> list[str]:
 
 def results_markdown(payload: dict) -> str:
     """benchmarks/results/accuracy.md: table 1 the references, 2 the paper's design,
-    3 the disc optimum, 4 the full solves (docs/accuracy.md), 5 the README's rows."""
+    3 the disc optimum, 4 the full solves (docs/accuracy.md), 5 the rows of docs/benchmarks.md."""
     parts = [
         "Accuracy against run time (`PYTHONPATH=. python benchmarks/accuracy.py`); every row "
         "is in docs/figures/accuracy.json.", "", "References:", "",
@@ -126,7 +126,7 @@ def results_markdown(payload: dict) -> str:
         "Full solves of problems/sharkov2022_disc.yaml (δ error: against the best verified "
         "optimum of all settings):", "",
         *solve_table(payload["paper"]["rows"]), "",
-        "The README's rows (the paper's design):", "",
+        "The rows docs/benchmarks.md shows (the paper's design):", "",
         *readme_table(payload["paper"]["rows"])]
     return "\n".join(parts) + "\n"
 

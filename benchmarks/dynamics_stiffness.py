@@ -13,7 +13,7 @@ accepted steps, right-hand-side evaluations, Jacobians, LU factorisations, switc
 and the dynamic δ of the last turn (the methods must agree on it), and writes them to
 benchmarks/results/NAME.{md,json} (``--name``, default dynamics_methods; the undamped run of
 docs/dynamics.md is ``--damping 0 --turns 1 --stiffness 1e2,1e4,1e5,1e6 --name
-dynamics_methods_undamped``), whose tables docs/dynamics.md and the README show.
+dynamics_methods_undamped``), whose tables docs/dynamics.md and docs/benchmarks.md show.
 
 Sweep (``--sweep``): the promised range of ``optdesign simulate`` at the problem files' own
 settings (100 turns at most, rtol 1e-8, atol 1e-10): stiffness 1e2 … 1e8 N·m/rad per decade ×
@@ -22,7 +22,7 @@ dynamic crank, ``--freewheel composite``, ``--crank constant``}, each run the re
 its own process. A run passes when it ends in exit 0 (steady) or exit 1 with one line on
 stderr, strict JSON on stdout (no NaN or Infinity) and the same ``reason`` in both, and no
 traceback. Writes benchmarks/results/dynamics_stiffness.{md,json} (a sweep of some problems or
-variants replaces their rows and keeps the others'); the README's dynamics table is its
+variants replaces their rows and keeps the others'); docs/benchmarks.md's dynamics table is its
 summary. ``--quick``: stiffness 1e2, 1e5, 1e8 only. tests/dynamics/
 test_stiffness_sweep.py runs the same grid reduced (two turns, rtol 1e-6) in ~40 s.
 """
@@ -74,7 +74,7 @@ def run_meta(**extra) -> dict:
 def compare_methods(args) -> None:
     """One row per (stiffness, method), printed as it comes, then written to
     benchmarks/results/NAME.{md,json} (NAME from ``--name``): table 1 every row, table 2 the
-    README's columns (Radau against RK45)."""
+    docs/benchmarks.md's columns (Radau against RK45)."""
     from optdesign.dynamics.steady import simulate
     from optdesign.outputs.atomic import atomic_write_json, atomic_write_text
 

@@ -1,4 +1,4 @@
-"""The disc problem made to tolerance and regulated: the README's and docs/tolerance.md's
+"""The disc problem made to tolerance and regulated: docs/benchmarks.md's and docs/tolerance.md's
 figures and table.
 
     python benchmarks/tolerance_regulation.py      # about 1 minute

@@ -97,7 +97,7 @@ def test_a_housing_bound_binds_exactly_and_no_sampled_design_beats_the_optimum()
     assert values["housing_radius"] == pytest.approx(bound.upper, rel=1e-7)   # it binds
     casing = next(a for a in result.active if a["name"] == "housing_radius")
     assert casing["unit"] == "mm"
-    assert casing["sensitivity"] == pytest.approx(-0.0013, abs=5e-5)     # README's figure
+    assert casing["sensitivity"] == pytest.approx(-0.0013, abs=5e-5)     # docs/problems.md's figure
     ver = verify(problem, result.design)
     assert ver.feasible and ver.delta == pytest.approx(result.delta, abs=1e-12)
     assert ver.measured.quantities["housing_radius"] == pytest.approx(

@@ -11,7 +11,7 @@ from optdesign.atlas.worker import solve_cell
 from tests.conftest import ROOT
 from tests.test_units import unlisted
 
-#: the disc problem's optima at n = 4 and 6 (README, solve_scaling: 0.252056, 0.140205), whose
+#: the disc problem's optima at n = 4 and 6 (docs/benchmarks.md, solve_scaling: 0.252056, 0.140205), whose
 #: box and pin radius this atlas holds relative to the 20 mm crank; the exact evaluator's δ,
 #: reproduced to 1e-8 (IPOPT's tolerance on the active constraints, well above rounding)
 DISC = {(4, 40): 0.2520563428, (6, 40): 0.1402049196}

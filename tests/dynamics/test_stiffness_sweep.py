@@ -13,7 +13,7 @@ cycle, so most runs here end "NOT steady" (exit 1): what is tested is that every
 in a stated outcome. Undamped, the reducer at λ = 1e7 and 1e8 and the four-bar at 1e8 ring
 at √(λ/I2) = 1.4e4 to 4.5e4 rad/s and need 5-20 s a run even so: those corners, and every
 corner at the problem files' own settings (100 turns, rtol 1e-8), run in
-``benchmarks/dynamics_stiffness.py --sweep``, whose table is in the README.
+``benchmarks/dynamics_stiffness.py --sweep``, whose table is in docs/benchmarks.md.
 """
 import json
 

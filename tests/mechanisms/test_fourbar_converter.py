@@ -27,7 +27,7 @@ def test_paper_forward_stroke_table(paper_design):
 
 def test_reverse_stroke_differs_from_paper(paper_design):
     """The paper's reverse figures (44.1, 29.5, 36.8, δ = 0.397) are not reproduced by the reading
-    that reproduces the forward stroke (README, "The reverse stroke"): we keep the kinematically
+    that reproduces the forward stroke (docs/solve.md, "The reverse stroke"): we keep the kinematically
     consistent value. Pinned here so a change of model is noticed."""
     f, _ = exact_figures(paper_design, "reverse", W1)
     assert f.omega_max == pytest.approx(42.303, abs=1e-3)

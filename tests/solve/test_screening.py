@@ -89,7 +89,7 @@ def test_nlp_is_built_once_per_phase_count():
 def test_the_jacobian_needs_few_forward_directions_at_many_phases():
     """The mean as running sums: no constraint row reads every hand-over angle, so the
     constraint Jacobian's forward colouring stays small (9 at n = 24; 29 with one dense sum,
-    which the README's account of the speed-up quotes)."""
+    which docs/solve.md's account of the speed-up quotes)."""
     import casadi as ca
 
     from optdesign.problem.loader import load_problem

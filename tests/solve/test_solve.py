@@ -49,7 +49,7 @@ def test_optimum_is_reverified_exactly(disc_result):
 
 def test_known_optimum_of_the_disc_problem(disc_result):
     """Reference: δ = 0.140214 (this solver, cross-checked by differential evolution in
-    benchmarks/solve_vs_peers.py, README). Tolerance 1e-5: IPOPT's tol is 1e-9."""
+    benchmarks/solve_vs_peers.py, docs/benchmarks.md). Tolerance 1e-5: IPOPT's tol is 1e-9."""
     assert disc_result.delta == pytest.approx(0.140214, abs=1e-5)
 
 

@@ -10,6 +10,7 @@ from optdesign.errors import ProblemError
 from optdesign.evaluation.design import Design
 from optdesign.evaluation.figures import evaluate
 from optdesign.evaluation.regulation import curve_over_range, worst_over_range
+from optdesign.evaluation.ripples import ripples_of_quantities
 from optdesign.outputs.tabular import Tabular
 from optdesign.outputs.units import design_units, gear_ratio_text, stamped
 from optdesign.quantities import design_quantities, get_quantity
@@ -78,6 +79,16 @@ class AnalysisResult(Tabular):
         out["quantities"] = self.quantities
         out.update(self.sections)
         return stamped(out, design_units(self.mechanism))
+
+
+def ripples_of_analysis(problem, result: AnalysisResult):
+    """The design's δ named (:class:`optdesign.evaluation.ripples.Ripples`): the worst over
+    the listed eccentricities (or the interval) and where it falls, and δ at each; None when
+    it does not assemble."""
+    if not result.assembles:
+        return None
+    return ripples_of_quantities(problem.objective.ripple, result.quantities,
+                                 problem.eccentricity_range)
 
 
 def transmission_angles(design: Design, eccentricity: float = 1.0,

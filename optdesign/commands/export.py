@@ -88,14 +88,24 @@ def run(args) -> int:
 
 
 def _title(problem, design, result, args) -> dict:
-    """The title block: what the drawing is of, each length (mm) and the exact figures."""
+    """The title block: what the drawing is of, each length (mm) and the exact figures, δ
+    named (:mod:`optdesign.evaluation.ripples`): the problem's, then at each eccentricity."""
+    from optdesign.analyses.analyze import ripples_of_analysis
+    from optdesign.evaluation.ripples import ripple_label
+
     model = problem.model
     stroke = result.strokes[problem.stroke]
     title = {"name": problem.name, "mechanism": problem.mechanism,
              model.count_variable: design.count,
              "eccentricity": float(args.eccentricity), "crank angle (deg)": float(args.angle)}
     title |= {f"{k} (mm)": float(design.values[k]) for k in model.lengths}
-    title |= {"ripple delta (e = 1)": float(stroke.delta), "ratio": float(stroke.ratio)}
+    named = ripples_of_analysis(problem, result)
+    if named is None:
+        title |= {ripple_label(problem.objective.ripple, 1.0): float(stroke.delta)}
+    else:
+        title |= {named.worst.label: named.worst.value}
+        title |= {r.label: r.value for r in named.each if len(named.each) > 1}
+    title |= {"ratio": float(stroke.ratio)}
     if result.min_transmission_angle_deg is not None:
         title["least transmission angle (deg)"] = float(result.min_transmission_angle_deg)
     return title

@@ -16,6 +16,8 @@ def add_parser(sub) -> None:
     p.add_argument("--json", action="store_true", help="print the contract's JSON")
     p.add_argument("--out", help="also draw regulation.png, δ and the ratio against the "
                                  "eccentricity, into this directory")
+    p.add_argument("--force", action="store_true",
+                   help="replace results of another problem file in the output folder")
     p.add_argument("--phases", type=int, metavar="N",
                    help="analyse this count only (phases, sections or freewheels: one of the "
                         "file's admissible counts); default: every admissible count")
@@ -38,7 +40,8 @@ def run(args) -> int:
     out = None
     if args.out is not None:
         from optdesign.outputs.checks import prepare_out
-        out = prepare_out(args.out, problem.name, files=("regulation.png",))
+        out = prepare_out(args.out, problem.name, files=("regulation.png",),
+                          source=args.problem, force=args.force)
     with phase("evaluating"):
         result = analyze_counts(problem)
     if args.json:

@@ -28,6 +28,8 @@ def add_parser(sub) -> None:
                    help="fraction e of the regulating length (default 1)")
     p.add_argument("--frames", type=int, default=120, help="frames of the turn (default 120)")
     p.add_argument("--out", help="output directory (default results/NAME/)")
+    p.add_argument("--force", action="store_true",
+                   help="replace results of another problem file in the output folder")
     p.set_defaults(run=run)
 
 
@@ -46,7 +48,8 @@ def run(args) -> int:
         raise UsageError(f"--frames must lie in [8, {MAX_FRAMES}] (got {args.frames})")
     names = ["animation.html", "animation.gif"] + (["animation.mp4"] if shutil.which("ffmpeg")
                                                    else [])
-    out = prepare_out(args.out, problem.name, files=tuple(names))
+    out = prepare_out(args.out, problem.name, files=tuple(names), source=args.problem,
+                      force=args.force)
     written = write_animation(problem, out, args.eccentricity, args.frames,
                               movies=tuple(n for n in names if not n.endswith(".html")))
     answered()

@@ -27,6 +27,8 @@ def add_parser(sub) -> None:
     p.add_argument("--eccentricity", type=float, default=1.0,
                    help="fraction e of the regulating length (default 1)")
     p.add_argument("--out", help="output directory (default results/NAME/)")
+    p.add_argument("--force", action="store_true",
+                   help="replace results of another problem file in the output folder")
     p.set_defaults(run=run)
 
 
@@ -54,7 +56,8 @@ def run(args) -> int:
                          f"{args.format!r})")
     if not math.isfinite(args.angle):
         raise UsageError(f"--angle must be a number of degrees (got {args.angle})")
-    out = prepare_out(args.out, problem.name, files=tuple(FORMATS[f] for f in formats))
+    out = prepare_out(args.out, problem.name, files=tuple(FORMATS[f] for f in formats),
+                      source=args.problem, force=args.force)
     with phase("evaluating"):
         design = Design.from_problem(problem)
         design.check_assembly(args.eccentricity)      # AssemblyError: exit 1, names the chain

@@ -16,7 +16,7 @@ from optdesign.outputs.atomic import (atomic_savefig, atomic_write_bytes, atomic
 
 #: every file ``solve`` may leave in its folder (the set :mod:`optdesign.outputs.folder` replaces)
 SOLVE_FILES = ("result.json", "summary.txt", "design.yaml", "speeds.png", "mechanism.png",
-               "animation.html")
+               "animation.html", "failed_result.json")
 #: every file ``pareto`` may leave in its folder (the set a fresh sweep clears)
 PARETO_FILES = ("points.jsonl", "pareto.csv", "pareto.json", "fronts.png", "lengths.png",
                 "knee_mechanism.png", "knee_speeds.png", "knee_animation.html", "report.md",

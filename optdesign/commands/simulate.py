@@ -23,6 +23,8 @@ def add_parser(sub) -> None:
     p.add_argument("problem", help="problem file (YAML) with a dynamics: section")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--out", help="output directory (default results/NAME/)")
+    p.add_argument("--force", action="store_true",
+                   help="replace results of another problem file in the output folder")
     p.add_argument("--method", choices=("Radau", "BDF", "LSODA", "RK45"),
                    help="override dynamics.method (RK45: explicit, for comparison only)")
     p.add_argument("--freewheel", choices=("ratchet", "composite"),
@@ -58,7 +60,7 @@ def run(args) -> int:
         raise UsageError(f"--cycles must be at most {MAX_CYCLES} (got {overrides['cycles']})")
     out = prepare_out(args.out, problem.name, files=(
         "dynamics.json", "dynamics_cycle.csv", "dynamics_angles.png", "dynamics_speeds.png",
-        "dynamics_loads.png"))
+        "dynamics_loads.png"), source=args.problem, force=args.force)
     section = replace(section, **overrides)
     # the figures' process imports matplotlib while this one integrates
     with FigureProcess(warm=warm_up) as figures:

@@ -12,7 +12,7 @@ from optdesign.evaluation.figures import evaluate
 from optdesign.evaluation.regulation import curve_over_range, worst_over_range
 from optdesign.evaluation.ripples import ripple_label, ripples_of_quantities
 from optdesign.outputs.tabular import Tabular
-from optdesign.outputs.units import design_units, gear_ratio_text, stamped
+from optdesign.outputs.units import design_units, gear_ratio_text, input_speed_text, stamped
 from optdesign.quantities import design_quantities, get_quantity
 from optdesign.quantities.criteria import Measured, searched_quantities
 from optdesign.solver.verify import checks
@@ -237,7 +237,8 @@ def _e(value) -> str:
 def format_analysis(result: AnalysisResult, name: str = "") -> str:
     """A readable table of an analysis, for the terminal."""
     units = design_units(result.mechanism)
-    lines = [f"{name or result.mechanism}: {result.mechanism}, ω1 = {result.input_speed:g} rad/s"]
+    lines = [f"{name or result.mechanism}: {result.mechanism}, "
+             f"{input_speed_text(result.input_speed)}"]
     lines.append("design: " + ", ".join(
         f"{k} = {v:g}" + (f" {units[k]}" if units.get(k, "-") != "-" else "")
         for k, v in result.design.items()))

@@ -47,7 +47,7 @@ def run(args) -> int:
     if args.json:
         print(json_text(chosen.stamped(result.to_dict())))
     else:
-        print(f"design: {chosen.source}")
+        print(chosen.line(problem))
         if result.per_count:
             print(format_counts(result))
         print(format_analysis(result, problem.name))

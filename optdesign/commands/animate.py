@@ -53,7 +53,7 @@ def run(args) -> int:
     written = write_animation(problem, out, args.eccentricity, args.frames,
                               movies=tuple(n for n in names if not n.endswith(".html")))
     answered()
-    print(f"design: {chosen.source}")
+    print(chosen.line(problem))
     print(f"wrote {', '.join(str(p) for p in written)}")
     return 0
 

@@ -60,6 +60,6 @@ def run(args) -> int:
                                                   f"e = {args.eccentricity:g}", out))])
             path, = figures.wait()
     answered()
-    print(f"design: {chosen.source}")
+    print(chosen.line(problem))
     print(path)
     return 0

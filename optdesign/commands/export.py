@@ -85,7 +85,7 @@ def run(args) -> int:
             written.append(atomic_write_text(out / FORMATS["csv"],
                                              table.to_csv(index=False, float_format="%.12g")))
     answered()
-    print(f"design: {chosen.source}")
+    print(chosen.line(problem))
     print(f"wrote {', '.join(str(p) for p in written)}")
     return 0
 

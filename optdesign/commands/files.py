@@ -207,14 +207,21 @@ def write_simulation(result, out: Path, plots: bool = True) -> list[Path]:
 
 
 def draw_simulation(result, out: Path, figures=None) -> list[Path]:
-    """The three figures (angles, speeds, loads), drawn by ``figures`` (default: here)."""
+    """The figures (angles, speeds, loads, and the natural frequencies beside the pulse
+    harmonics), drawn by ``figures`` (default: here)."""
     from optdesign.dynamics.plots import plot_angles, plot_loads, plot_speeds
 
+    from optdesign.dynamics.resonance import plot_frequencies
+
     figures = _drawer(figures)
-    figures.draw([(saved, (plot, (result,), out / name, {"dpi": 120}))
-                  for name, plot in (("dynamics_angles.png", plot_angles),
-                                     ("dynamics_speeds.png", plot_speeds),
-                                     ("dynamics_loads.png", plot_loads))])
+    jobs = [(saved, (plot, (result,), out / name, {"dpi": 120}))
+            for name, plot in (("dynamics_angles.png", plot_angles),
+                               ("dynamics_speeds.png", plot_speeds),
+                               ("dynamics_loads.png", plot_loads))]
+    if result.resonance:
+        jobs.append((saved, (plot_frequencies, (result.resonance, result.name),
+                             out / "dynamics_frequencies.png", {"dpi": 120})))
+    figures.draw(jobs)
     return figures.wait()
 
 

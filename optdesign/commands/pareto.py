@@ -99,6 +99,7 @@ def run(args) -> int:
             from optdesign.fronts import sweep
             from optdesign.fronts.files import write_front
             from optdesign.fronts.report import summary_text
+            from optdesign.outputs.units import input_speed_text
         # one run at a time in ``out``; a fresh sweep clears the previous one's files first,
         # so the folder never holds files of two runs (docs/contract.md)
         with _connected(args.scheduler) as scheduler, exit_on_sigterm(), \
@@ -110,7 +111,8 @@ def run(args) -> int:
                                resume=args.resume, scheduler=scheduler)
             with phase("files"):
                 files = write_front(result, out)
-                print_answer(summary_text(result))
+                print_answer(f"{problem.name}: {input_speed_text(problem.input_speed)}",
+                             summary_text(result))
             if not args.no_report:
                 command = " ".join(["optdesign pareto", args.problem, "--out", str(out)] + [
                     f"--{k} {getattr(args, k)}" for k in ("points", "against", "workers",

@@ -60,7 +60,8 @@ def run(args) -> int:
         raise UsageError(f"--cycles must be at most {MAX_CYCLES} (got {overrides['cycles']})")
     out = prepare_out(args.out, problem.name, files=(
         "dynamics.json", "dynamics_cycle.csv", "dynamics_angles.png", "dynamics_speeds.png",
-        "dynamics_loads.png"), source=args.problem, force=args.force)
+        "dynamics_loads.png", "dynamics_frequencies.png"), source=args.problem,
+        force=args.force)
     section = replace(section, **overrides)
     # the figures' process imports matplotlib while this one integrates
     with FigureProcess(warm=warm_up) as figures:
@@ -77,13 +78,13 @@ def run(args) -> int:
         with phase("files"):
             write_simulation(result, out, plots=False)
             print_answer(json_text(chosen.stamped(result.to_dict())) if args.json else
-                         f"design: {chosen.source}\n{format_result(result)}")
+                         f"{chosen.line(problem)}\n{format_result(result)}")
         with phase("figures"):
             draw_simulation(result, out, figures)
     raise_if_unprinted()
     if not args.json:
         print(f"wrote {out}/dynamics.json, dynamics_cycle.csv, dynamics_angles.png, "
-              f"dynamics_speeds.png, dynamics_loads.png")
+              f"dynamics_speeds.png, dynamics_loads.png, dynamics_frequencies.png")
     if result.steady:
         return 0
     print(f"optdesign: {problem.source}: {result.reason}", file=sys.stderr)
@@ -138,6 +139,10 @@ def format_result(r) -> str:
         f"{ms(first.get('t0_s'))}, t1 {ms(first.get('t1_s'))}, t2 {ms(first.get('t2_s'))}, "
         f"t3 {ms(first.get('t3_s'))}, ε max {first.get('eps_max') or 0:.5g} rad",
     ]
+    from optdesign.dynamics.resonance import resonance_text
+
+    lines += resonance_text(r.resonance, r.dynamic.delta, r.kinematic.delta) \
+        if r.resonance else []
     return "\n".join(lines + load_lines(r.loads))
 
 

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from optdesign.evaluation.sensitivity import sensitivity_line
-from optdesign.outputs.units import gear_ratio_text
+from optdesign.outputs.units import gear_ratio_text, input_speed_text
 from optdesign.quantities import get_quantity
 from optdesign.quantities.criteria import (LengthConstraint, constraints_of, objective_of,
                                            quantity_specs)
@@ -12,7 +12,7 @@ def summary_text(result, problem) -> str:
     """A short plain-text account of a solve, for the terminal and summary.txt."""
 
     lines = [f"{problem.name}: {result.status} ({problem.mechanism}, {problem.stroke} stroke, "
-             f"ω1 = {problem.input_speed:g} rad/s)"]
+             f"{input_speed_text(problem.input_speed)})"]
     if result.design:
         lengths = set(problem.model.lengths)
         lines.append("design: " + ", ".join(f"{k} = {v:.4f} mm" if k in lengths else

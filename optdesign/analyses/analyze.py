@@ -216,7 +216,8 @@ def format_counts(result: AnalysisResult) -> str:
             rows.append(f"  {r.design[key]:>5}  does not assemble: {r.failure['message']}")
             continue
         violated = [c["name"] for c in r.constraints if not c["satisfied"]]
-        rows.append(f"  {r.design[key]:>5}  {named.worst.value:9.6f} {_e(named.worst.at):>6}  "
+        rows.append(f"  {r.design[key]:>5}  {named.worst.value:9.6f} "
+                    f"{_e(named.worst.eccentricity):>6}  "
                     f"{r.quantities['values'].get('ratio', float('nan')):8.4f}  "
                     f"{r.min_transmission_angle_deg:7.2f}  "
                     f"{'violates ' + ', '.join(violated) if violated else 'all satisfied'}")

@@ -50,7 +50,7 @@ def compare(candidates: list[Candidate]) -> list[dict]:
                     "ripple_definition": ripple}
             if named is not None:
                 row |= {"delta_label": named.worst.label,
-                        "delta_eccentricity": named.worst.at}
+                        "delta_eccentricity": named.worst.eccentricity}
             row |= {k: v for k, v in figures.items()
                     if k not in ("ripple", "ratio", "transmission_angle")}
         else:

@@ -45,8 +45,10 @@ def run(args) -> int:
     out, _ = resolve_out(args.out, spec.name)
     if args.resume and not os.path.lexists(out / JOURNAL):
         raise ProblemError(f"{out / JOURNAL}: nothing to resume (no journal there)")
-    out = prepare_out(args.out, spec.name, files=ATLAS_FILES, source=args.atlas,
-                      force=args.force, record=False)
+    # a resumed atlas's journal checks whose it is itself
+    out = prepare_out(args.out, spec.name, files=ATLAS_FILES,
+                      source=None if args.resume else args.atlas, force=args.force,
+                      record=False)
     with _connected(args.scheduler) as scheduler, exit_on_sigterm(), \
             OutputFolder(out, ATLAS_FILES, args.atlas) as folder:
         if not args.resume:

@@ -90,8 +90,10 @@ def run(args) -> int:
     out, _ = resolve_out(args.out, problem.name, "_pareto")
     if args.resume and not os.path.lexists(out / "points.jsonl"):
         raise ProblemError(f"{out / 'points.jsonl'}: nothing to resume (no journal there)")
+    # a resumed sweep's journal checks whose it is itself
     out = prepare_out(args.out, problem.name, "_pareto", files=PARETO_FILES,
-                      source=args.problem, force=args.force, record=False)
+                      source=None if args.resume else args.problem, force=args.force,
+                      record=False)
     # the report's figures are drawn beside, by a process forked before any thread or worker
     # (a Dask client, the sweep's pool) exists; it imports matplotlib while the sweep runs
     with FigureProcess(enabled=not args.no_report, warm=partial(warm_up, problem)) as figures:

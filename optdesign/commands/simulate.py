@@ -63,6 +63,9 @@ def run(args) -> int:
         "dynamics_loads.png", "dynamics_frequencies.png"), source=args.problem,
         force=args.force)
     section = replace(section, **overrides)
+    from optdesign.dynamics.section import check_motor_speed
+
+    check_motor_speed(section, problem)          # before any work: exit 2 naming both
     # the figures' process imports matplotlib while this one integrates
     with FigureProcess(warm=warm_up) as figures:
         with phase("imports"):

@@ -28,9 +28,9 @@ HARMONICS = 3
 
 
 def natural_frequencies(I1: float, I2: float, stiffness: float) -> dict[str, float]:
-    """rad/s: ``output`` √(λ/I2) and ``two_mass`` √(λ(I1 + I2)/(I1·I2))."""
-    return {"output": math.sqrt(stiffness / I2),
-            "two_mass": math.sqrt(stiffness * (I1 + I2) / (I1 * I2))}
+    """``output_rad_s`` √(λ/I2) and ``two_mass_rad_s`` √(λ(I1 + I2)/(I1·I2))."""
+    return {"output_rad_s": math.sqrt(stiffness / I2),
+            "two_mass_rad_s": math.sqrt(stiffness * (I1 + I2) / (I1 * I2))}
 
 
 def resonance(I1: float, I2: float, stiffness: float, pulses_per_turn: int,
@@ -41,7 +41,8 @@ def resonance(I1: float, I2: float, stiffness: float, pulses_per_turn: int,
     natural = natural_frequencies(I1, I2, stiffness)
     pulse = pulses_per_turn * omega_in
     harmonics = [k * pulse for k in range(1, HARMONICS + 1)]
-    pairs = [(abs(h / natural["output"] - 1.0), k + 1, "output", natural["output"], h)
+    out = natural["output_rad_s"]
+    pairs = [(abs(h / out - 1.0), k + 1, "output", out, h)
              for k, h in enumerate(harmonics)]
     gap, k, name, w, h = min(pairs)
     return {"natural_rad_s": natural, "pulse_rad_s": pulse, "harmonics_rad_s": harmonics,
@@ -56,8 +57,8 @@ def resonance_text(doc: dict, delta_dynamic: float, delta_kinematic: float) -> l
     ratio when a pulse harmonic is near a natural frequency."""
     nat = doc["natural_rad_s"]
     c = doc["closest"]
-    lines = [f"  frequencies      natural √(λ/I2) = {nat['output']:.1f} rad/s, two-mass "
-             f"{nat['two_mass']:.1f} rad/s; pulses {doc['pulses_per_turn']}·ω1 = "
+    lines = [f"  frequencies      natural √(λ/I2) = {nat['output_rad_s']:.1f} rad/s, two-mass "
+             f"{nat['two_mass_rad_s']:.1f} rad/s; pulses {doc['pulses_per_turn']}·ω1 = "
              f"{doc['pulse_rad_s']:.1f} rad/s (harmonics "
              + ", ".join(f"{h:.1f}" for h in doc["harmonics_rad_s"]) + ")"]
     if doc["near"]:
@@ -77,10 +78,10 @@ def plot_frequencies(doc: dict, title: str = "", ax=None):
     import matplotlib.pyplot as plt
 
     fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(figsize=(8, 2.8))
-    colours = {"output": "tab:red", "two_mass": "tab:purple"}
-    names = {"output": "√(λ/I2)", "two_mass": "two-mass √(λ(I1+I2)/(I1·I2))"}
+    colours = {"output_rad_s": "tab:red", "two_mass_rad_s": "tab:purple"}
+    names = {"output_rad_s": "√(λ/I2)", "two_mass_rad_s": "two-mass √(λ(I1+I2)/(I1·I2))"}
     for name, w in doc["natural_rad_s"].items():
-        if name == "output":            # the mode the warning reads
+        if name == "output_rad_s":      # the mode the warning reads
             ax.axvspan(w * (1 - doc["margin"]), w * (1 + doc["margin"]), color=colours[name],
                        alpha=0.12)
         ax.axvline(w, color=colours[name], lw=2, label=f"natural {names[name]} = {w:.1f} rad/s")

@@ -31,7 +31,7 @@ from optdesign.dynamics.loads import loads
 from optdesign.dynamics.model import DriveModel, Mode, TWO_PI
 from optdesign.dynamics.resonance import resonance
 from optdesign.dynamics.result import SimulationResult
-from optdesign.dynamics.section import DynamicsSection
+from optdesign.dynamics.section import DynamicsSection, check_motor_speed
 from optdesign.dynamics.verdict import LONGEST_PERIOD, held_whole_turn, judge
 from optdesign.envelope.exact import exact_figures
 from optdesign.envelope.sampled import StrokeFigures
@@ -62,6 +62,7 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
         the crank cannot get round.
     """
     section = section or problem.sections["dynamics"]
+    check_motor_speed(section, problem)
     method = method or section.method
     design = Design.from_problem(problem)
     design.check_assembly()

@@ -10,7 +10,9 @@ interval), and it falls at one of them. Every output that shows a δ labels it w
   eccentricities, and where it falls;
 * ``δ (midrange, worst over e in [0.2, 1], at e = 0.3471) = 0.140214``: the worst over a
   regulation interval, and where it falls;
-* ``δ (midrange, at e = 1) = 0.079003``: at one named eccentricity.
+* ``δ (midrange, at e = 1) = 0.079003``: at one named eccentricity;
+* ``δ (midrange, worst over e = 1) = 0.103975``: the problem's δ when it lists one
+  eccentricity.
 """
 from __future__ import annotations
 
@@ -28,7 +30,7 @@ def ripple_label(definition: str, at: float | None, over=(), interval=None) -> s
     where = [definition]
     if interval is not None:
         where.append(f"worst over e in [{_e(interval[0])}, {_e(interval[1])}]")
-    elif len(over) > 1:
+    elif over:
         where.append(f"worst over e = {', '.join(_e(e) for e in over)}")
     if at is not None:
         where.append(f"at e = {_e(at)}")
@@ -54,8 +56,13 @@ class Ripple:
         """``label = value`` with ``digits`` decimals."""
         return f"{self.label} = {self.value:.{digits}f}"
 
+    @property
+    def eccentricity(self) -> float | None:
+        """Where the δ falls (the one listed e when it is the worst over one)."""
+        return self.at if self.at is not None or len(self.over) != 1 else self.over[0]
+
     def to_dict(self) -> dict:
-        return {"delta": self.value, "eccentricity": self.at, "label": self.label}
+        return {"delta": self.value, "eccentricity": self.eccentricity, "label": self.label}
 
 
 @dataclass(frozen=True)
@@ -82,6 +89,8 @@ def named_ripples(definition: str, per_e: dict, interval=None,
     top = max(each, key=lambda r: r.value)
     if interval is not None:
         worst = Ripple(top.value, definition, top.at, interval=tuple(interval))
+    elif len(per_e) == 1:           # one listed e: "worst over e = 1", where it falls is plain
+        worst = Ripple(top.value, definition, None, (top.at,))
     else:
         worst = Ripple(top.value, definition, top.at, tuple(float(e) for e in per_e))
     return Ripples(worst, tuple(each))

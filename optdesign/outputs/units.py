@@ -119,6 +119,9 @@ UNITS: dict[str, str] = {
     "engaged_share": "- (share of the cycle's time)",
     "rtol": "-", "atol": "rad", "cycles": COUNT, "period_turns": COUNT, "steps": COUNT,
     "events": COUNT, "counters": "- (counts)",
+    "pulses_per_turn": COUNT, "harmonic": "- (k of the k-th pulse harmonic)",
+    "relative_gap": "- (|harmonic / natural frequency - 1|)",
+    "delta_ratio": "- (dynamic delta / kinematic delta)",
 }
 
 #: a key ending so has this unit (longest suffix first)

@@ -25,8 +25,8 @@ def _drive(I2):
 
 def test_natural_frequencies_are_the_closed_forms():
     nat = natural_frequencies(0.014, 0.05, 2877.0)
-    assert nat["output"] == pytest.approx((2877 / 0.05) ** 0.5)            # 239.87 rad/s
-    assert nat["two_mass"] == pytest.approx((2877 * 0.064 / (0.014 * 0.05)) ** 0.5)
+    assert nat["output_rad_s"] == pytest.approx((2877 / 0.05) ** 0.5)      # 239.87 rad/s
+    assert nat["two_mass_rad_s"] == pytest.approx((2877 * 0.064 / (0.014 * 0.05)) ** 0.5)
     doc = resonance(0.014, 0.33, 2877.0, 6, 15.5)
     assert doc["near"] and doc["closest"]["harmonic"] == 1
 
@@ -54,4 +54,4 @@ def test_a_motor_nine_times_too_fast_is_refused_naming_both_speeds():
     with pytest.raises(ProblemError, match=r"drive\.yaml: dynamics\.motor: the motor's no-load "
                                            r"speed a/b = 345/2\.35 = 146\.8 rad/s against "
                                            r"input_speed 15\.5 rad/s \(9\.5 times it\)"):
-        problem_from_dict(data, where="drive.yaml")
+        simulate(problem_from_dict(data, where="drive.yaml"))

@@ -50,3 +50,40 @@ def test_analyze_imports_no_plotting_module():
             "sys.exit(1 if bad else 0)" % PAPER_FILE)
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
+
+
+SPREADER = ROOT / "problems" / "spreader.yaml"
+
+
+def test_analyze_over_choices_evaluates_every_count(capsys):
+    """phases: {choices: [4, 5, 6, 8]}: a row per count, the JSON per count, the first
+    count's keys as before; each count's δ is that count's own."""
+    assert main(["analyze", str(SPREADER), "--json"]) == 1       # the ratio floor: violated
+    out = json.loads(capsys.readouterr().out)
+    assert [c["count"] for c in out["per_count"]] == [4, 5, 6, 8]
+    assert out["design"]["phases"] == 4 and out["per_count"][0]["design"]["phases"] == 4
+    deltas = [c["delta_named"]["worst"]["delta"] for c in out["per_count"]]
+    assert out["delta_named"]["worst"]["delta"] == deltas[0]
+    assert deltas == sorted(deltas, reverse=True) and len(set(deltas)) == 4
+    assert main(["analyze", str(SPREADER)]) == 1
+    text = capsys.readouterr().out
+    assert "every admissible count (phases: 4, 5, 6, 8)" in text
+    for n, d in zip([4, 5, 6, 8], deltas):
+        assert f"  {n:>5}  {d:9.6f}" in text
+
+
+def test_analyze_phases_picks_one_count_or_names_the_admissible(capsys):
+    assert main(["analyze", str(SPREADER), "--phases", "6", "--json"]) == 1
+    out = json.loads(capsys.readouterr().out)
+    assert out["design"]["phases"] == 6 and "per_count" not in out
+    assert main(["analyze", str(SPREADER), "--phases", "7"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["optdesign: spreader.yaml: --phases 7 is not an admissible count of "
+                   "design.phases (admissible: 4, 5, 6, 8)"]
+
+
+def test_analysis_summary_names_its_delta():
+    from optdesign import analyze
+
+    text = analyze(PAPER_FILE).summary()
+    assert "δ (midrange, worst over e = 1, 0.5, 0.25, at e = 1) = 0.376413" in text

@@ -59,8 +59,10 @@ def test_cli_curves_writes_a_png(tmp_path, capsys, mechanism):
     assert main(["curves", str(problem), "--out", str(tmp_path), "--samples", "181"]) == 0
     png = tmp_path / "curves.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["curves.png"]   # no temp file left
-    assert capsys.readouterr().out.splitlines() == ["design: the file's design", str(png)]
+    # no temp file left; the record of the problem file beside the figure
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".optdesign-source.json", "curves.png"]
+    first, second = capsys.readouterr().out.splitlines()
+    assert first.startswith("design: the file's design; ω1 = ") and second == str(png)
 
 
 @pytest.mark.parametrize("args, message", [

@@ -39,7 +39,7 @@ def test_analyze_takes_the_solved_design(solved, name):
     first = text.splitlines()[0]
     assert code == 0
     assert first == f"design: {'the optimum' if name == 'result.json' else 'the design'} of " \
-                    f"{out / name}"
+                    f"{out / name}; ω1 = 97 rad/s (926.3 rpm)"
     code, text = run_main(["analyze", DISC, "--design", out / name, "--json"])
     analysed = json.loads(text)
     assert analysed["design"] == result["design"]

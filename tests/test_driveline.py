@@ -465,7 +465,9 @@ def test_driveline_command_writes_the_figure(tmp_path, capsys):
     assert main(["driveline", str(PROBLEM), "--out", str(tmp_path)]) == 0
     png = tmp_path / "driveline.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert [p.name for p in tmp_path.iterdir()] == ["driveline.png"]    # no temp file left
+    # no temp file left; the record of the problem file beside the figure
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".optdesign-source.json",
+                                                          "driveline.png"]
     out = capsys.readouterr().out
     assert "ω_cr = 1191.46 rad/s" in out and out.endswith(f"wrote {png}\n")
 

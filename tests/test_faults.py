@@ -20,6 +20,10 @@ import yaml
 
 from optdesign.cli import main
 from optdesign.commands.files import SOLVE_FILES
+from optdesign.outputs.provenance import SOURCE
+
+#: what a solve with figures leaves: its files (no failed run's) and the record of its source
+RUN_SET = set(SOLVE_FILES) - {"failed_result.json"} | {SOURCE}
 from optdesign.fronts.store import Journal
 from tests.conftest import ROOT
 from tests.pareto.conftest import small
@@ -129,26 +133,26 @@ def test_killed_solve_leaves_the_previous_set_whole_and_the_next_run_leaves_no_l
     out = tmp_path / "out"
     assert main(["solve", str(a), "--out", str(out)]) == 0
     before = _snapshot(out)
-    assert set(before) == set(SOLVE_FILES)
+    assert set(before) == RUN_SET
 
     # kill -9 in the middle of writing summary.txt (result.json already written), then after
     # 0.5 s (still importing or solving)
-    proc = _start(["solve", b, "--out", out], pause_at="summary.txt")
+    proc = _start(["solve", b, "--out", out, "--force"], pause_at="summary.txt")
     _wait_paused(proc)
     _kill(proc)
     assert _snapshot(out) == before                        # front_a's set, every byte
     leftovers = [p for p in tmp_path.iterdir() if p.name.startswith(".out.new-")]
     assert leftovers and any(p.name.startswith(".summary.txt.")
                              for p in leftovers[0].iterdir())
-    proc = _start(["solve", b, "--out", out])
+    proc = _start(["solve", b, "--out", out, "--force"])
     time.sleep(0.5)
     _kill(proc)
     assert _snapshot(out) == before
     (out / ".result.json.x1y2z3.tmp").write_bytes(b'{"name": "fr')   # an older version's
 
-    assert main(["solve", str(b), "--out", str(out)]) == 0
+    assert main(["solve", str(b), "--out", str(out), "--force"]) == 0
     after = _snapshot(out)
-    assert set(after) == set(SOLVE_FILES)
+    assert set(after) == RUN_SET
     assert yaml.safe_load(after["result.json"])["name"] == "front_b"
     assert after["summary.txt"].startswith(b"front_b:")
     assert _litter(out) == []
@@ -171,7 +175,8 @@ def test_two_runs_on_one_folder_one_refuses_and_a_killed_holder_blocks_nobody(
     finally:
         _kill(holder)
     assert main(["solve", str(b), "--out", str(out), "--no-plots"]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["design.yaml", "result.json", "summary.txt"]
+    assert sorted(p.name for p in out.iterdir()) == [SOURCE, "design.yaml", "result.json",
+                                                     "summary.txt"]
     assert _litter(out) == []
 
 

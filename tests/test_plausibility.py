@@ -61,3 +61,53 @@ def test_a_zero_angle_switches_the_rule_off_without_a_word():
     with warnings.catch_warnings():
         warnings.simplefilter("error", UnitWarning)
         problem_from_dict(file_data(DISC, constraints__min_transmission_angle_deg=0))
+
+
+# ----------------------------------------------------------- fractions given in per cent
+def _spreader(**constraints):
+    import yaml
+
+    from tests.conftest import ROOT
+    data = yaml.safe_load((ROOT / "problems" / "spreader.yaml").read_text())
+    data["constraints"].update(constraints)
+    return data
+
+
+def test_a_ratio_bound_in_per_cent_is_refused_at_load_time():
+    import pytest
+
+    from optdesign.errors import ProblemError
+    from optdesign.problem.loader import problem_from_dict
+
+    with pytest.raises(ProblemError, match=r"^s\.yaml: constraints\.ratio\.lower: 40 is a ratio "
+                                           r"\(output / input speed\), a fraction \(per cent\? "
+                                           r"40 % is 0\.4\); above 10 no design reaches it$"):
+        problem_from_dict(_spreader(ratio={"lower": 40}), where="s.yaml")
+
+
+
+def test_a_ratio_bound_above_one_is_warned_as_per_cent_or_overdrive():
+    import warnings
+
+    from optdesign.errors import UnitWarning
+    from optdesign.problem.loader import problem_from_dict
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        problem_from_dict(_spreader(ratio={"lower": 4}), where="s.yaml")
+    text = [str(w.message) for w in caught if issubclass(w.category, UnitWarning)]
+    assert len(text) == 1 and "constraints.ratio.lower: 4 is a ratio" in text[0] \
+        and "per cent? 4 % is 0.04" in text[0] and "overdrive" in text[0]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        problem_from_dict(_spreader(ripple={"upper": 15}), where="s.yaml")
+    text = [str(w.message) for w in caught if issubclass(w.category, UnitWarning)]
+    assert len(text) == 1 and "constraints.ripple.upper: 15 is a ripple δ, a fraction (per " \
+                              "cent? 15 % is 0.15); the midrange δ never exceeds 2" in text[0]
+
+
+def test_every_first_line_states_the_crank_speed_in_rad_s_and_rpm():
+    from tests.conftest import ROOT, run_main
+
+    code, out = run_main(["analyze", ROOT / "problems" / "sharkov2022.yaml"])
+    assert out.splitlines()[0].endswith("; ω1 = 97 rad/s (926.3 rpm)")

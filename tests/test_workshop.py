@@ -19,7 +19,8 @@ def exported(solved_disc, tmp_path_factory):
     code, text = run_main(["export", DISC, "--design", solved / "design.yaml",
                            "--angle", "30", "--out", out / "export"])
     assert code == 0
-    assert text.splitlines()[0] == f"design: the design of {solved / 'design.yaml'}"
+    assert text.splitlines()[0] == f"design: the design of {solved / 'design.yaml'}; " \
+                                   f"ω1 = 97 rad/s (926.3 rpm)"
     return out / "export", result
 
 
@@ -209,6 +210,6 @@ def test_one_design_through_every_command(exported, solved_disc, tmp_path):
                         "--out", tmp_path / "compared"])
     assert code == 0
     assert {p.name for p in out.iterdir()} == {"linkage.dxf", "linkage.svg",
-                                               "trajectories.csv"}
+                                               "trajectories.csv", ".optdesign-source.json"}
     assert {p.name for p in (out.parent / "animated").iterdir()} >= {"animation.html",
                                                                     "animation.gif"}

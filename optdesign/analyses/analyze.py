@@ -10,8 +10,9 @@ from optdesign.errors import ProblemError
 from optdesign.evaluation.design import Design
 from optdesign.evaluation.figures import evaluate
 from optdesign.evaluation.regulation import curve_over_range, worst_over_range
+from optdesign.evaluation.ripples import ripple_label, ripples_of_quantities
 from optdesign.outputs.tabular import Tabular
-from optdesign.outputs.units import design_units, gear_ratio_text, stamped
+from optdesign.outputs.units import design_units, gear_ratio_text, input_speed_text, stamped
 from optdesign.quantities import design_quantities, get_quantity
 from optdesign.quantities.criteria import Measured, searched_quantities
 from optdesign.solver.verify import checks
@@ -41,13 +42,32 @@ class AnalysisResult(Tabular):
     #: every quantity's exact value (:func:`optdesign.quantities.quantities_of`: ``values``
     #: and ``per_eccentricity``); empty when the design does not assemble
     quantities: dict = field(default_factory=dict)
+    #: which δ the problem names (its ``objective.ripple``) and its regulation interval
+    ripple_definition: str = "midrange"
+    eccentricity_range: tuple | None = None
+    count_variable: str = "phases"
+    #: with several admissible counts: the analysis of each, in order (``analyze_counts``);
+    #: this result's own keys are the first count's
+    per_count: list = field(default_factory=list)
 
     def summary(self) -> str:
         lengths = ", ".join(f"{k} = {v:g}" for k, v in self.design.items())
         if not self.assembles:
             return f"{self.mechanism} ({lengths}): does not assemble: {self.failure['message']}"
-        return (f"{self.mechanism} ({lengths}): least transmission angle "
+        named = self.ripples()
+        delta = f"{named.worst.text(6)}, " if named is not None else ""
+        ratio = self.quantities.get("values", {}).get("ratio")
+        ratio = f"ratio = {ratio:.6f}, " if ratio is not None else ""
+        return (f"{self.mechanism} ({lengths}): {delta}{ratio}least transmission angle "
                 f"{self.min_transmission_angle_deg:.2f}°")
+
+    def ripples(self):
+        """The design's δ named (:class:`optdesign.evaluation.ripples.Ripples`); None when it
+        does not assemble or holds no ripple."""
+        if not self.assembles:
+            return None
+        return ripples_of_quantities(self.ripple_definition, self.quantities,
+                                     self.eccentricity_range)
 
     def to_frame(self):
         """One row per listed eccentricity and stroke: the exact ω_max, ω_min, midrange and
@@ -59,7 +79,9 @@ class AnalysisResult(Tabular):
                 for r in self.regulation for stroke, figures in r["strokes"].items()]
         return pd.DataFrame(rows)
 
-    def to_dict(self) -> dict:
+    def to_dict(self, each: bool = True) -> dict:
+        """The contract's keys (the first count's, with several), and with ``each`` and
+        several counts ``per_count``: each count's keys, with its ``count``."""
         out = {
             "assembles": self.assembles,
             "min_transmission_angle_deg": self.min_transmission_angle_deg,
@@ -76,8 +98,37 @@ class AnalysisResult(Tabular):
             out["failure"] = self.failure
         out["constraints"] = self.constraints
         out["quantities"] = self.quantities
+        named = self.ripples()
+        if named is not None:
+            out["delta_named"] = named.to_dict()
         out.update(self.sections)
+        if self.per_count and each:
+            out["per_count"] = [{"count": r.design[self.count_variable]} |
+                                {k: v for k, v in r.to_dict(each=False).items()
+                                 if k not in ("schema_version", "units")}
+                                for r in self.per_count]
         return stamped(out, design_units(self.mechanism))
+
+
+def ripples_of_analysis(problem, result: AnalysisResult):
+    """The design's δ named (:class:`optdesign.evaluation.ripples.Ripples`): the worst over
+    the listed eccentricities (or the interval) and where it falls, and δ at each; None when
+    it does not assemble."""
+    return result.ripples()
+
+
+def analyze_counts(problem) -> AnalysisResult:
+    """:func:`analyze` of the problem's design at each admissible count (a file with
+    ``phases: {choices: [...]}`` or ``{lower, upper}``): the first count's result, holding
+    every count's in ``per_count`` (one count: its result alone)."""
+    counts = problem.counts()
+    if len(counts) == 1:
+        return analyze(problem)
+    key = problem.model.count_variable
+    each = [analyze(problem.with_design(**{key: n})) for n in counts]
+    first = each[0]
+    first.per_count = each
+    return first
 
 
 def transmission_angles(design: Design, eccentricity: float = 1.0,
@@ -98,6 +149,9 @@ def analyze(problem, values: dict | None = None) -> AnalysisResult:
                             design={k: float(v) for k, v in design.values.items()},
                             mechanism=problem.mechanism, input_speed=problem.input_speed)
     result.design[mech.count_variable] = design.count
+    result.ripple_definition = problem.objective.ripple
+    result.count_variable = mech.count_variable
+    result.eccentricity_range = problem.eccentricity_range
     eccentricities = sorted(set(problem.eccentricities) | {1.0}, reverse=True)
     ev = evaluate(design, problem.stroke, problem.input_speed, eccentricities, mech.strokes)
     if isinstance(ev.failure, ProblemError):
@@ -151,10 +205,41 @@ def check_constraints(problem, ev) -> list[dict]:
             for criterion, amount, holds in checks(problem, Measured.of(problem, ev))]
 
 
+def format_counts(result: AnalysisResult) -> str:
+    """The table of :func:`analyze_counts`: one row per admissible count (δ named as the
+    problem names it, the ratio, the least transmission angle, the constraints)."""
+    key = result.count_variable
+    rows = []
+    for r in result.per_count:
+        named = r.ripples()
+        if named is None:
+            rows.append(f"  {r.design[key]:>5}  does not assemble: {r.failure['message']}")
+            continue
+        violated = [c["name"] for c in r.constraints if not c["satisfied"]]
+        rows.append(f"  {r.design[key]:>5}  {named.worst.value:9.6f} "
+                    f"{_e(named.worst.eccentricity):>6}  "
+                    f"{r.quantities['values'].get('ratio', float('nan')):8.4f}  "
+                    f"{r.min_transmission_angle_deg:7.2f}  "
+                    f"{'violates ' + ', '.join(violated) if violated else 'all satisfied'}")
+    first = next((r.ripples() for r in result.per_count if r.ripples() is not None), None)
+    label = "δ" if first is None else \
+        ripple_label(first.worst.definition, None, first.worst.over, first.worst.interval)
+    counts = ", ".join(str(r.design[key]) for r in result.per_count)
+    head = [f"every admissible count ({key}: {counts}), the same lengths; δ is {label}:",
+            f"  {key:>5}  {'δ':>9} {'at e':>6}  {'ratio':>8}  {'μ_min':>7}  constraints"]
+    return "\n".join(head + rows + [f"(the details below are {key} = "
+                                      f"{result.design[key]}'s; --{key} N analyses another)"])
+
+
+def _e(value) -> str:
+    return "-" if value is None else f"{value:g}"
+
+
 def format_analysis(result: AnalysisResult, name: str = "") -> str:
     """A readable table of an analysis, for the terminal."""
     units = design_units(result.mechanism)
-    lines = [f"{name or result.mechanism}: {result.mechanism}, ω1 = {result.input_speed:g} rad/s"]
+    lines = [f"{name or result.mechanism}: {result.mechanism}, "
+             f"{input_speed_text(result.input_speed)}"]
     lines.append("design: " + ", ".join(
         f"{k} = {v:g}" + (f" {units[k]}" if units.get(k, "-") != "-" else "")
         for k, v in result.design.items()))
@@ -163,6 +248,9 @@ def format_analysis(result: AnalysisResult, name: str = "") -> str:
         return "\n".join(lines)
     lines.append(f"least transmission angle: {result.min_transmission_angle_deg:.2f} deg "
                  f"(per chain: {', '.join(f'{a:.1f}' for a in result.chains_min_transmission_angle_deg)})")
+    named = result.ripples()
+    if named is not None:
+        lines.append(named.worst.text(6))
     for row in result.regulation:
         lines.append("")
         lines.append(f"eccentricity {row['eccentricity']:g}:")

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from optdesign.analyses.analyze import analyze
+from optdesign.analyses.analyze import analyze, ripples_of_analysis
 from optdesign.envelope.sampled import output_envelope
 from optdesign.errors import AssemblyError
 from optdesign.evaluation.design import Design
@@ -31,7 +31,9 @@ class Candidate:
 def compare(candidates: list[Candidate]) -> list[dict]:
     """One row per candidate: ``label``, ``mechanism``, the count, each length (mm),
     ``delta``, ``ratio``, ``min_transmission_angle_deg`` (exact, at the problem's listed
-    eccentricities), every quantity's value, and the result's extras."""
+    eccentricities), ``delta_label`` and ``delta_eccentricity`` (which δ that is and where it
+    falls, :mod:`optdesign.evaluation.ripples`), every quantity's value, and the result's
+    extras."""
     rows = []
     for c in candidates:
         result = analyze(c.problem)
@@ -42,9 +44,13 @@ def compare(candidates: list[Candidate]) -> list[dict]:
         if result.assembles:
             ripple = problem.objective.ripple
             figures = result.quantities.get("values", {})
+            named = ripples_of_analysis(problem, result)
             row |= {"delta": figures.get("ripple"), "ratio": figures.get("ratio"),
                     "min_transmission_angle_deg": result.min_transmission_angle_deg,
                     "ripple_definition": ripple}
+            if named is not None:
+                row |= {"delta_label": named.worst.label,
+                        "delta_eccentricity": named.worst.eccentricity}
             row |= {k: v for k, v in figures.items()
                     if k not in ("ripple", "ratio", "transmission_angle")}
         else:
@@ -53,17 +59,20 @@ def compare(candidates: list[Candidate]) -> list[dict]:
     return rows
 
 
-def envelopes(candidates: list[Candidate], samples: int = 721) -> dict[str, tuple]:
-    """label -> (crank angle [deg], output speed [rad/s]) of each candidate at e = 1."""
+def envelopes(candidates: list[Candidate], samples: int = 721,
+              eccentricities: dict | None = None) -> dict[str, tuple]:
+    """label -> (crank angle [deg], output speed [rad/s]) of each candidate at e = 1, or at
+    its eccentricity in ``eccentricities`` ({label: e}; e.g. where its worst δ falls)."""
     phi = np.linspace(0.0, 2 * np.pi, samples)
     out = {}
     for c in candidates:
         design = Design.from_problem(c.problem)
+        e = (eccentricities or {}).get(c.label) or 1.0
         try:
-            design.check_assembly(1.0)
+            design.check_assembly(e)
         except AssemblyError:       # a design that does not assemble has no envelope to draw
             continue
-        dtheta = design.sample(phi, 1.0)["dtheta"]
+        dtheta = design.sample(phi, e)["dtheta"]
         out[c.label] = (np.degrees(phi),
                         output_envelope(dtheta, c.problem.stroke) * c.problem.input_speed)
     return out

@@ -28,6 +28,8 @@ def add_parser(sub) -> None:
                    help="fraction e of the regulating length (default 1)")
     p.add_argument("--frames", type=int, default=120, help="frames of the turn (default 120)")
     p.add_argument("--out", help="output directory (default results/NAME/)")
+    p.add_argument("--force", action="store_true",
+                   help="replace results of another problem file in the output folder")
     p.set_defaults(run=run)
 
 
@@ -47,12 +49,13 @@ def run(args) -> int:
         raise UsageError(f"--frames must lie in [8, {MAX_FRAMES}] (got {args.frames})")
     names = ["animation.html", "animation.gif"] + (["animation.mp4"] if shutil.which("ffmpeg")
                                                    else [])
-    out = prepare_out(args.out, problem.name, files=tuple(names))
+    out = prepare_out(args.out, problem.name, files=tuple(names), source=args.problem,
+                      force=args.force)
     written = write_set(out, names, lambda into: write_animation(
         problem, into, args.eccentricity, args.frames,
         movies=tuple(n for n in names if not n.endswith(".html"))))
     answered()
-    print(f"design: {chosen.source}")
+    print(chosen.line(problem))
     print(f"wrote {', '.join(str(p) for p in written)}")
     return 0
 
@@ -65,22 +68,35 @@ def write_animation(problem, out, eccentricity: float = 1.0, frames: int = 120,
     from pathlib import Path
 
     from optdesign.evaluation.design import Design
-    from optdesign.evaluation.figures import evaluate
+    from optdesign.evaluation.figures import evaluate, evaluate_problem
+    from optdesign.evaluation.ripples import Ripple, ripples_of_evaluation
     from optdesign.export.animation import html_page, movie, turn, turn_title
     from optdesign.outputs.atomic import atomic_write_bytes, atomic_write_text
 
     with phase("evaluating"):
         design = Design.from_problem(problem)
         design.check_assembly(eccentricity)
-        ev = evaluate(design, problem.stroke, problem.input_speed, (eccentricity,))
+        ev = evaluate_problem(problem)
+        if ev.failure is None and eccentricity not in ev.eccentricities:
+            drawn = evaluate(design, problem.stroke, problem.input_speed, (eccentricity,))
+            ev.failure = drawn.failure
+            ev.per_e += drawn.per_e
         if ev.failure is not None:
             raise ev.failure
-        title = turn_title(problem, design, ev.per_e[0].figures[problem.stroke])
-        data = turn(design, problem.stroke, problem.input_speed, eccentricity, frames)
+        named = ripples_of_evaluation(problem, ev)
+        each = list(named.each)
+        if all(r.at != eccentricity for r in each):
+            figures = ev.at(eccentricity).figures[problem.stroke]
+            each.insert(0, Ripple(figures.ripple(problem.objective.ripple),
+                                  problem.objective.ripple, eccentricity))
+        outputs = tuple((r.at, f"output at e = {r.at:g}: {r.text(4)}") for r in each)
+        title = turn_title(problem, design, ev.figures, named)
+        data = turn(design, problem.stroke, problem.input_speed, eccentricity, frames, outputs)
     with phase("files"):
         written = [atomic_write_text(Path(out) / html_name, html_page(data, title))]
     if movies and frames > MOVIE_FRAMES:      # a movie's frames are drawn one by one: fewer
-        data = turn(design, problem.stroke, problem.input_speed, eccentricity, MOVIE_FRAMES)
+        data = turn(design, problem.stroke, problem.input_speed, eccentricity, MOVIE_FRAMES,
+                    outputs)
     for name in movies:
         with phase("figures"), tempfile.TemporaryDirectory() as scratch:
             path = Path(scratch) / name

@@ -16,6 +16,8 @@ def add_parser(sub) -> None:
                                      "to the crank (a design atlas)")
     p.add_argument("atlas", help="atlas file (YAML, docs/atlas.md)")
     p.add_argument("--out", help="output folder (default results/NAME/)")
+    p.add_argument("--force", action="store_true",
+                   help="replace results of another problem file in the output folder")
     p.add_argument("--workers", type=_positive(1, COUNTS["workers"]),
                    help="worker processes (default: every core; a local pool starts at most "
                         f"{PROCESSES_PER_CORE} per core)")
@@ -43,9 +45,12 @@ def run(args) -> int:
     out, _ = resolve_out(args.out, spec.name)
     if args.resume and not os.path.lexists(out / JOURNAL):
         raise ProblemError(f"{out / JOURNAL}: nothing to resume (no journal there)")
-    out = prepare_out(args.out, spec.name, files=ATLAS_FILES)
+    # a resumed atlas's journal checks whose it is itself
+    out = prepare_out(args.out, spec.name, files=ATLAS_FILES,
+                      source=None if args.resume else args.atlas, force=args.force,
+                      record=False)
     with _connected(args.scheduler) as scheduler, exit_on_sigterm(), \
-            OutputFolder(out, ATLAS_FILES) as folder:
+            OutputFolder(out, ATLAS_FILES, args.atlas) as folder:
         if not args.resume:
             folder.remove_owned()
         result = run_atlas(spec, out, workers=args.workers, resume=args.resume,

@@ -19,6 +19,8 @@ def add_parser(sub) -> None:
     p.add_argument("--json", action="store_true", help='print {"rows": [...]} as JSON')
     p.add_argument("--out", help="folder for accuracy.png and accuracy.json "
                                  "(default results/NAME/)")
+    p.add_argument("--force", action="store_true",
+                   help="replace results of another problem file in the output folder")
     p.add_argument("--solve", metavar="PROBLEM",
                    help="also time full solves of this problem (it needs free lengths)")
     p.add_argument("--crosscheck", type=int, default=0, metavar="N",
@@ -51,7 +53,8 @@ def run(args) -> int:
     solve_problem = load_problem(args.solve) if args.solve else None
     if solve_problem is not None and not solve_problem.free_lengths():
         raise ProblemError(f"{solve_problem.source}: --solve needs a problem with free lengths")
-    out = prepare_out(args.out, problem.name, files=("accuracy.json", "accuracy.png"))
+    out = prepare_out(args.out, problem.name, files=("accuracy.json", "accuracy.png"),
+                      source=args.problem, force=args.force)
     # a bar on stderr over the evaluations, silent when stderr is not a terminal
     total = evaluation_count(quick=args.quick, solve=solve_problem is not None)
     with tqdm(total=total, desc="evaluations", unit="eval", file=sys.stderr, disable=None,

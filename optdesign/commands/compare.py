@@ -45,16 +45,18 @@ def run(args) -> int:
     import pandas as pd
 
     table = pd.DataFrame(rows)
-    exact = {r["label"]: r.get("delta") for r in rows}
-    curves = {(f"{label}: δ = {exact[label]:.6f} (exact, worst over its listed e)"
-               if exact.get(label) is not None else label): curve
-              for label, curve in envelopes(candidates).items()}
+    named = {r["label"]: r for r in rows if r.get("delta_label")}
+    at = {label: r["delta_eccentricity"] for label, r in named.items()}
+    curves = {(f"{label}: {named[label]['delta_label']} = {named[label]['delta']:.6f}"
+               if label in named else label): curve
+              for label, curve in envelopes(candidates, eccentricities=at).items()}
 
     def write(into):
         return [atomic_write_text(into / "compare.csv",
                                   table.to_csv(index=False, float_format="%.10g")),
                 save_figure(plot_envelopes(curves, title="output speed over one crank turn, "
-                                                         "e = 1"), into / "compare.png")]
+                                                         "each at the eccentricity of its δ"),
+                            into / "compare.png")]
     write_set(out, ("compare.csv", "compare.png"), write)
     if args.json:
         print(json_text(stamped({"designs": rows}, _units(candidates))))

@@ -15,6 +15,8 @@ def add_parser(sub) -> None:
                                       "freewheel output over a turn")
     p.add_argument("problem", help="problem file (YAML)")
     p.add_argument("--out", help="output directory (default results/NAME/)")
+    p.add_argument("--force", action="store_true",
+                   help="replace results of another problem file in the output folder")
     p.add_argument("--eccentricity", type=float, default=1.0,
                    help="fraction e of the regulating length (default 1)")
     p.add_argument("--samples", type=int, default=1441, help="crank samples (default 1441)")
@@ -43,7 +45,8 @@ def run(args) -> int:
         raise UsageError(f"--samples must be at least 16 (got {args.samples})")
     if args.samples > MAX_SAMPLES:
         raise UsageError(f"--samples must be at most {MAX_SAMPLES} (got {args.samples})")
-    out = prepare_out(args.out, problem.name, files=("curves.png",))
+    out = prepare_out(args.out, problem.name, files=("curves.png",), source=args.problem,
+                      force=args.force)
     # the figures' process imports matplotlib while this one computes the curves
     with FigureProcess(warm=warm_up) as figures:
         with phase("evaluating"):
@@ -57,6 +60,6 @@ def run(args) -> int:
                                                   f"e = {args.eccentricity:g}", out))])
             path, = figures.wait()
     answered()
-    print(f"design: {chosen.source}")
+    print(chosen.line(problem))
     print(path)
     return 0

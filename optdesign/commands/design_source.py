@@ -50,6 +50,13 @@ class ChosenDesign:
         return {k: v for k, v in doc.items() if k not in stamp} | \
             {"design_source": self.source} | {k: doc[k] for k in stamp if k in doc}
 
+    def line(self, problem) -> str:
+        """A command's first terminal line: where the design came from, and the crank speed
+        in rad/s and rpm."""
+        from optdesign.outputs.units import input_speed_text
+
+        return f"design: {self.source}; {input_speed_text(problem.input_speed)}"
+
     def problem(self, problem):
         """``problem`` with this design fixed (the problem itself for the file's own)."""
         if self.values is None:

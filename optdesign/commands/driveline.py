@@ -17,6 +17,8 @@ def add_parser(sub) -> None:
                                          "its speed (needs a driveline: section)")
     p.add_argument("problem", help="problem file (YAML) with a driveline: section")
     p.add_argument("--out", help="output directory (default results/NAME/)")
+    p.add_argument("--force", action="store_true",
+                   help="replace results of another problem file in the output folder")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     add_arguments(p)
     p.set_defaults(run=run)
@@ -35,7 +37,8 @@ def run(args) -> int:
     with phase("reading"):
         problem, chosen = loaded(args, one_count=False)
         section = problem.require_section("driveline")
-    out = prepare_out(args.out, problem.name, files=("driveline.png",))
+    out = prepare_out(args.out, problem.name, files=("driveline.png",), source=args.problem,
+                      force=args.force)
     # the figures' process imports matplotlib while this one evaluates the design
     with FigureProcess(warm=warm_up) as figures:
         with phase("imports"):

@@ -27,6 +27,8 @@ def add_parser(sub) -> None:
     p.add_argument("--eccentricity", type=float, default=1.0,
                    help="fraction e of the regulating length (default 1)")
     p.add_argument("--out", help="output directory (default results/NAME/)")
+    p.add_argument("--force", action="store_true",
+                   help="replace results of another problem file in the output folder")
     p.set_defaults(run=run)
 
 
@@ -53,7 +55,8 @@ def run(args) -> int:
                          f"{args.format!r})")
     if not math.isfinite(args.angle):
         raise UsageError(f"--angle must be a number of degrees (got {args.angle})")
-    out = prepare_out(args.out, problem.name, files=tuple(FORMATS[f] for f in formats))
+    out = prepare_out(args.out, problem.name, files=tuple(FORMATS[f] for f in formats),
+                      source=args.problem, force=args.force)
     with phase("evaluating"):
         design = Design.from_problem(problem)
         design.check_assembly(args.eccentricity)      # AssemblyError: exit 1, names the chain
@@ -62,7 +65,7 @@ def run(args) -> int:
     written = write_set(out, owned, lambda into: _write(problem, design, result, args,
                                                          formats, into))
     answered()
-    print(f"design: {chosen.source}")
+    print(chosen.line(problem))
     print(f"wrote {', '.join(str(p) for p in written)}")
     return 0
 
@@ -99,14 +102,24 @@ def _write(problem, design, result, args, formats, out) -> list:
 
 
 def _title(problem, design, result, args) -> dict:
-    """The title block: what the drawing is of, each length (mm) and the exact figures."""
+    """The title block: what the drawing is of, each length (mm) and the exact figures, δ
+    named (:mod:`optdesign.evaluation.ripples`): the problem's, then at each eccentricity."""
+    from optdesign.analyses.analyze import ripples_of_analysis
+    from optdesign.evaluation.ripples import ripple_label
+
     model = problem.model
     stroke = result.strokes[problem.stroke]
     title = {"name": problem.name, "mechanism": problem.mechanism,
              model.count_variable: design.count,
              "eccentricity": float(args.eccentricity), "crank angle (deg)": float(args.angle)}
     title |= {f"{k} (mm)": float(design.values[k]) for k in model.lengths}
-    title |= {"ripple delta (e = 1)": float(stroke.delta), "ratio": float(stroke.ratio)}
+    named = ripples_of_analysis(problem, result)
+    if named is None:
+        title |= {ripple_label(problem.objective.ripple, 1.0): float(stroke.delta)}
+    else:
+        title |= {named.worst.label: named.worst.value}
+        title |= {r.label: r.value for r in named.each if len(named.each) > 1}
+    title |= {"ratio": float(stroke.ratio)}
     if result.min_transmission_angle_deg is not None:
         title["least transmission angle (deg)"] = float(result.min_transmission_angle_deg)
     return title

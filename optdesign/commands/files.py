@@ -16,7 +16,7 @@ from optdesign.outputs.atomic import (atomic_savefig, atomic_write_bytes, atomic
 
 #: every file ``solve`` may leave in its folder (the set :mod:`optdesign.outputs.folder` replaces)
 SOLVE_FILES = ("result.json", "summary.txt", "design.yaml", "speeds.png", "mechanism.png",
-               "animation.html")
+               "animation.html", "failed_result.json")
 #: every file ``pareto`` may leave in its folder (the set a fresh sweep clears)
 PARETO_FILES = ("points.jsonl", "pareto.csv", "pareto.json", "fronts.png", "lengths.png",
                 "knee_mechanism.png", "knee_speeds.png", "knee_animation.html", "report.md",
@@ -75,8 +75,7 @@ def draw_solve(result, problem, out_dir: str | Path, figures=None) -> list[Path]
     out = Path(out_dir)
     figures = _drawer(figures)
     figures.draw([(_speeds_png, (problem, result.design, out / "speeds.png",
-                                 f"{problem.name}: optimum, δ = {result.delta:.4f}, "
-                                 f"ratio = {result.ratio:.4f}")),
+                                 f"{problem.name}: optimum")),
                   (_mechanism_png, (problem, result.design, out / "mechanism.png",
                                     f"{problem.name}: optimum"))])
     from optdesign.commands.animate import write_animation
@@ -85,29 +84,57 @@ def draw_solve(result, problem, out_dir: str | Path, figures=None) -> list[Path]
     return figures.wait() + html
 
 
-def _speeds_png(problem, values: dict, path: Path, title: str) -> Path:
-    """Each rocker's driving speed and the output envelope of the design ``values``."""
+def _speeds_png(problem, values: dict, path: Path, head: str) -> Path:
+    """Each rocker's driving speed and the output envelope of the design ``values``: the
+    output at every listed eccentricity (and the interval's worst), each labelled with its
+    δ, the title with the problem's δ (:mod:`optdesign.evaluation.ripples`); the title and
+    the labels also stored as the PNG's ``Title`` and ``Description`` text."""
     from optdesign.evaluation.design import Design
+    from optdesign.evaluation.ripples import design_ripples
     from optdesign.figures.design import plot_speeds
 
     design = Design.from_problem(problem, values)
-    return save_figure(plot_speeds(design, problem.stroke, problem.input_speed, title=title),
-                       path)
+    named = design_ripples(problem, values)
+    outputs = None
+    title = head
+    if named is not None:
+        ratio = design_ratio(problem, values)
+        title = f"{head}, ratio = {ratio:.4f}\n{named.worst.text(4)}"
+        outputs = [(r.at, f"output at e = {r.at:g}: {r.text(4)}") for r in named.each]
+    fig = plot_speeds(design, problem.stroke, problem.input_speed, title=title,
+                      outputs=outputs)
+    text = {"Title": title.replace("\n", "; ")}
+    if outputs:
+        text["Description"] = "\n".join(label for _, label in outputs)
+    return save_figure(fig, path, metadata=text)
+
+
+def design_ratio(problem, values: dict) -> float:
+    """The exact ratio (at e = 1) of the problem's design ``values``."""
+    from optdesign.evaluation.figures import evaluate_problem
+
+    return evaluate_problem(problem, values).ratio
 
 
 def _mechanism_png(problem, values: dict, path: Path, title: str) -> Path:
     """The linkage of the design ``values`` to scale: the figure of ``plot_mechanism``, in a
-    figures' process rendered in two bands at once (the slowest figure of ``solve``)."""
+    figures' process rendered in two bands at once (the slowest figure of ``solve``); its
+    title with the problem's δ named (:mod:`optdesign.evaluation.ripples`), also stored as
+    the PNG's ``Title`` text."""
     from functools import partial
 
     from optdesign.evaluation.design import Design
+    from optdesign.evaluation.ripples import design_ripples
     from optdesign.figures.design import BANDS, mechanism_figure
     from optdesign.outputs.figure_process import in_figures_process
     from optdesign.outputs.split_figure import save_split
 
     design = Design.from_problem(problem, values)
+    named = design_ripples(problem, values)
+    if named is not None:
+        title = f"{title}: {named.worst.text(4)}"
     return save_split(partial(mechanism_figure, design, title=title), BANDS, path,
-                      split=in_figures_process())
+                      split=in_figures_process(), metadata={"Title": title})
 
 
 # --------------------------------------------------------------------------- pareto
@@ -141,8 +168,7 @@ def write_report(result, problem, out_dir, problem_path=None,
         jobs["knee_mechanism.png"] = (_mechanism_png, (
             problem, values, out / "knee_mechanism.png", f"knee design, n = {int(knee['count'])}"))
         jobs["knee_speeds.png"] = (_speeds_png, (
-            problem, values, out / "knee_speeds.png",
-            f"knee design: δ = {knee['delta']:.4f}, ratio = {knee['ratio']:.4f}"))
+            problem, values, out / "knee_speeds.png", "knee design"))
     figures = _drawer(figures)
     figures.draw(list(jobs.values()))
     html = []
@@ -181,14 +207,21 @@ def write_simulation(result, out: Path, plots: bool = True) -> list[Path]:
 
 
 def draw_simulation(result, out: Path, figures=None) -> list[Path]:
-    """The three figures (angles, speeds, loads), drawn by ``figures`` (default: here)."""
+    """The figures (angles, speeds, loads, and the natural frequencies beside the pulse
+    harmonics), drawn by ``figures`` (default: here)."""
     from optdesign.dynamics.plots import plot_angles, plot_loads, plot_speeds
 
+    from optdesign.dynamics.resonance import plot_frequencies
+
     figures = _drawer(figures)
-    figures.draw([(saved, (plot, (result,), out / name, {"dpi": 120}))
-                  for name, plot in (("dynamics_angles.png", plot_angles),
-                                     ("dynamics_speeds.png", plot_speeds),
-                                     ("dynamics_loads.png", plot_loads))])
+    jobs = [(saved, (plot, (result,), out / name, {"dpi": 120}))
+            for name, plot in (("dynamics_angles.png", plot_angles),
+                               ("dynamics_speeds.png", plot_speeds),
+                               ("dynamics_loads.png", plot_loads))]
+    if result.resonance:
+        jobs.append((saved, (plot_frequencies, (result.resonance, result.name),
+                             out / "dynamics_frequencies.png", {"dpi": 120})))
+    figures.draw(jobs)
     return figures.wait()
 
 

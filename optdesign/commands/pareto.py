@@ -17,6 +17,8 @@ def add_parser(sub) -> None:
     p = sub.add_parser("pareto", help="sweep the ripple/ratio front of every phase count")
     p.add_argument("problem", help="problem file (YAML)")
     p.add_argument("--out", help="output folder (default results/NAME_pareto/)")
+    p.add_argument("--force", action="store_true",
+                   help="replace results of another problem file in the output folder")
     p.add_argument("--points", type=_positive(2, MAX_POINTS), help="ε values per phase count "
                                                         "(default: pareto.points, else 12)")
     p.add_argument("--against", metavar="QUANTITY",
@@ -88,7 +90,10 @@ def run(args) -> int:
     out, _ = resolve_out(args.out, problem.name, "_pareto")
     if args.resume and not os.path.lexists(out / "points.jsonl"):
         raise ProblemError(f"{out / 'points.jsonl'}: nothing to resume (no journal there)")
-    out = prepare_out(args.out, problem.name, "_pareto", files=PARETO_FILES)
+    # a resumed sweep's journal checks whose it is itself
+    out = prepare_out(args.out, problem.name, "_pareto", files=PARETO_FILES,
+                      source=None if args.resume else args.problem, force=args.force,
+                      record=False)
     # the report's figures are drawn beside, by a process forked before any thread or worker
     # (a Dask client, the sweep's pool) exists; it imports matplotlib while the sweep runs
     with FigureProcess(enabled=not args.no_report, warm=partial(warm_up, problem)) as figures:
@@ -96,10 +101,11 @@ def run(args) -> int:
             from optdesign.fronts import sweep
             from optdesign.fronts.files import write_front
             from optdesign.fronts.report import summary_text
+            from optdesign.outputs.units import input_speed_text
         # one run at a time in ``out``; a fresh sweep clears the previous one's files first,
         # so the folder never holds files of two runs (docs/contract.md)
         with _connected(args.scheduler) as scheduler, exit_on_sigterm(), \
-                OutputFolder(out, PARETO_FILES) as folder:
+                OutputFolder(out, PARETO_FILES, args.problem) as folder:
             if not args.resume:
                 folder.remove_owned()
             with phase("solving"):
@@ -107,7 +113,8 @@ def run(args) -> int:
                                resume=args.resume, scheduler=scheduler)
             with phase("files"):
                 files = write_front(result, out)
-                print_answer(summary_text(result))
+                print_answer(f"{problem.name}: {input_speed_text(problem.input_speed)}",
+                             summary_text(result))
             if not args.no_report:
                 command = " ".join(["optdesign pareto", args.problem, "--out", str(out)] + [
                     f"--{k} {getattr(args, k)}" for k in ("points", "against", "workers",

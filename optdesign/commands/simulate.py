@@ -23,6 +23,8 @@ def add_parser(sub) -> None:
     p.add_argument("problem", help="problem file (YAML) with a dynamics: section")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--out", help="output directory (default results/NAME/)")
+    p.add_argument("--force", action="store_true",
+                   help="replace results of another problem file in the output folder")
     p.add_argument("--method", choices=("Radau", "BDF", "LSODA", "RK45"),
                    help="override dynamics.method (RK45: explicit, for comparison only)")
     p.add_argument("--freewheel", choices=("ratchet", "composite"),
@@ -57,8 +59,12 @@ def run(args) -> int:
         raise UsageError(f"--cycles must be at least 1 (got {overrides['cycles']})")
     if overrides.get("cycles", 1) > MAX_CYCLES:
         raise UsageError(f"--cycles must be at most {MAX_CYCLES} (got {overrides['cycles']})")
-    out = prepare_out(args.out, problem.name, files=SIMULATE_FILES)
+    out = prepare_out(args.out, problem.name, files=SIMULATE_FILES, source=args.problem,
+                      force=args.force)
     section = replace(section, **overrides)
+    from optdesign.dynamics.section import check_motor_speed
+
+    check_motor_speed(section, problem)          # before any work: exit 2 naming both
     # the figures' process imports matplotlib while this one integrates
     with FigureProcess(warm=warm_up) as figures:
         with phase("imports"):
@@ -76,14 +82,14 @@ def run(args) -> int:
             with phase("files"):
                 written = write_simulation(result, into, plots=False)
                 print_answer(json_text(chosen.stamped(result.to_dict())) if args.json else
-                             f"design: {chosen.source}\n{format_result(result)}")
+                             f"{chosen.line(problem)}\n{format_result(result)}")
             with phase("figures"):
                 return written + draw_simulation(result, into, figures)
         write_set(out, SIMULATE_FILES, write)      # the earlier set, or this one whole
     raise_if_unprinted()
     if not args.json:
         print(f"wrote {out}/dynamics.json, dynamics_cycle.csv, dynamics_angles.png, "
-              f"dynamics_speeds.png, dynamics_loads.png")
+              f"dynamics_speeds.png, dynamics_loads.png, dynamics_frequencies.png")
     if result.steady:
         return 0
     print(f"optdesign: {problem.source}: {result.reason}", file=sys.stderr)
@@ -110,7 +116,7 @@ def _failed(problem, section, args, out, exc) -> int:
 
 #: the files of a simulation, replaced together
 SIMULATE_FILES = ("dynamics.json", "dynamics_cycle.csv", "dynamics_angles.png",
-                  "dynamics_speeds.png", "dynamics_loads.png")
+                  "dynamics_speeds.png", "dynamics_loads.png", "dynamics_frequencies.png")
 STATUS_TEXT = {"steady": "steady", "not_steady": "NOT steady", "stalled": "STALLED"}
 
 
@@ -144,6 +150,10 @@ def format_result(r) -> str:
         f"{ms(first.get('t0_s'))}, t1 {ms(first.get('t1_s'))}, t2 {ms(first.get('t2_s'))}, "
         f"t3 {ms(first.get('t3_s'))}, ε max {first.get('eps_max') or 0:.5g} rad",
     ]
+    from optdesign.dynamics.resonance import resonance_text
+
+    lines += resonance_text(r.resonance, r.dynamic.delta, r.kinematic.delta) \
+        if r.resonance else []
     return "\n".join(lines + load_lines(r.loads))
 
 

@@ -27,6 +27,8 @@ def add_parser(sub) -> None:
                                          "section)")
     p.add_argument("problem", help="problem file (YAML) with a tolerances: section")
     p.add_argument("-o", "--out", help="output directory (default results/NAME/)")
+    p.add_argument("--force", action="store_true",
+                   help="replace results of another problem file in the output folder")
     p.add_argument("--samples", type=int, help="Monte Carlo parts (default tolerances.samples)")
     p.add_argument("--seed", type=int, help="seed of the sample (default tolerances.seed)")
     add_arguments(p)
@@ -62,7 +64,8 @@ def run(args) -> int:
         chosen = chosen_design(args, problem)
     values, source = chosen.values, chosen.source
     box = box_of(problem, values, section)
-    out = prepare_out(args.out, problem.name, files=TOLERANCE_FILES)      # before any work
+    out = prepare_out(args.out, problem.name, files=TOLERANCE_FILES, source=args.problem,
+                      force=args.force)      # before any work
     # the figures' process imports matplotlib while this one samples the parts
     with FigureProcess(warm=warm_up) as figures:
         with phase("imports"):

@@ -55,6 +55,9 @@ class SimulationResult:
     #: the freewheels' torques and the joints' forces over the cycle
     #: (:func:`optdesign.dynamics.loads.loads`)
     loads: dict = field(default_factory=dict)
+    #: the natural frequencies beside the pulse frequency and its harmonics, and whether one
+    #: lies near another (:func:`optdesign.dynamics.resonance.resonance`)
+    resonance: dict = field(default_factory=dict)
 
     @property
     def steady(self) -> bool:
@@ -101,6 +104,9 @@ class SimulationResult:
                       "rtol": self.rtol, "atol": self.atol},
             "counters": self.counters, "wall_time_s": self.wall_time_s,
             "loads": self.loads,
+            "resonance": self.resonance | (
+                {"delta_ratio": self.dynamic.delta / self.kinematic.delta}
+                if self.resonance and self.kinematic.delta else {}),
         })
 
 

@@ -96,6 +96,40 @@ class DynamicsSection:
                                    f"phases)")
 
 
+#: the motor's no-load speed a/b against input_speed: refused outside [lower, upper] times
+#: it (a/b below ω1: the crank never reaches it; far above: the motor drives the crank far
+#: faster than the file says, e.g. a motor's characteristic given at the motor shaft of a
+#: gearbox instead of at the crank), warned above ``warned`` times it
+MOTOR_SPEEDS = {"lower": 1.0, "warned": 1.25, "upper": 2.0}
+
+
+def check_motor_speed(section, problem) -> None:
+    """ProblemError when the motor's no-load speed a/b is far from ``input_speed``, naming
+    both; a UnitWarning when it is somewhat above it. Checked by ``simulate`` with the
+    dynamic crank (a file whose section is not simulated is not held to it)."""
+    if section.crank != "dynamic":
+        return
+    import warnings
+
+    from optdesign.errors import UnitWarning
+
+    free = section.motor_a / section.motor_b
+    w1 = problem.input_speed
+    both = (f"the motor's no-load speed a/b = {section.motor_a:g}/{section.motor_b:g} = "
+            f"{free:.4g} rad/s against input_speed {w1:g} rad/s")
+    if free < MOTOR_SPEEDS["lower"] * w1:
+        raise ProblemError(f"{problem.source}: dynamics.motor: {both}: the crank never reaches "
+                           f"input_speed (give the characteristic at the crank)")
+    if free > MOTOR_SPEEDS["upper"] * w1:
+        raise ProblemError(f"{problem.source}: dynamics.motor: {both} ({free / w1:.1f} times "
+                           f"it): the motor would drive the crank near {free:.4g} rad/s; give "
+                           f"the characteristic at the crank (a·r, b·r² through a reduction "
+                           f"r) or input_speed as the crank's speed")
+    if free > MOTOR_SPEEDS["warned"] * w1:
+        warnings.warn(UnitWarning(f"{problem.source}: dynamics.motor: {both}: the crank will "
+                                  f"turn faster than input_speed"), stacklevel=3)
+
+
 def _ranged_key(name: str, meaning: str, range_of: str | None = None, **kw) -> Key:
     """A number key whose range (and unit) is ``RANGES[range_of or name]``."""
     lower, upper, unit = RANGES[range_of or name]

@@ -29,8 +29,9 @@ from optdesign.dynamics.instants import first_turn_instants, steady_instants
 from optdesign.dynamics.integrator import Integrator, Trace
 from optdesign.dynamics.loads import loads
 from optdesign.dynamics.model import DriveModel, Mode, TWO_PI
+from optdesign.dynamics.resonance import resonance
 from optdesign.dynamics.result import SimulationResult
-from optdesign.dynamics.section import DynamicsSection
+from optdesign.dynamics.section import DynamicsSection, check_motor_speed
 from optdesign.dynamics.verdict import LONGEST_PERIOD, held_whole_turn, judge
 from optdesign.envelope.exact import exact_figures
 from optdesign.envelope.sampled import StrokeFigures
@@ -61,6 +62,7 @@ def simulate(problem, section: DynamicsSection | None = None, method: str | None
         the crank cannot get round.
     """
     section = section or problem.sections["dynamics"]
+    check_motor_speed(section, problem)
     method = method or section.method
     design = Design.from_problem(problem)
     design.check_assembly()
@@ -219,7 +221,20 @@ def _result(problem, section, method, model, integ, run: _Approach, cycle: _Cycl
         labels=labels,
         trace={"t": cycle.t, "phi": ys[0], "omega_in": ys[1], "psi": ys[2] - start[2],
                "omega_out": ys[3], "eps": cycle.eps, "engaged": cycle.engaged,
-               "holder_speed": _holder_speeds(model, ys)})
+               "holder_speed": _holder_speeds(model, ys)},
+        resonance=_resonance(problem, section, float(omega_in_mean)))
+
+
+def _resonance(problem, section: DynamicsSection, omega_in: float) -> dict:
+    """:func:`optdesign.dynamics.resonance.resonance` of the drive at its mean crank speed:
+    the pulses per turn are the output envelope's hand-overs (one per driving run), λ the
+    freewheels' mean stiffness."""
+    from optdesign.evaluation.figures import evaluate
+
+    design = Design.from_problem(problem)
+    runs = evaluate(design, problem.stroke, omega_in, (1.0,)).per_e[0].runs
+    stiffness = float(np.mean(section.stiffness_per_phase(design.count)))
+    return resonance(section.I1, section.I2, stiffness, max(1, len(runs)), omega_in)
 
 
 def _initial_state(model: DriveModel) -> tuple[np.ndarray, Mode]:

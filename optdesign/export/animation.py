@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from optdesign.envelope.sampled import STROKE_SIGNS, driving_speeds
-from optdesign.figures.design import linkage
+from optdesign.figures.design import ZOOM_BELOW, linkage
 
 #: frames of one crank turn
 FRAMES = 120
@@ -37,6 +37,12 @@ class Turn:
     driving: np.ndarray              # (frames,) member index driving the output
     speeds: np.ndarray               # (members, frames) driving speed s·ω_k, rad/s (best sign)
     output: np.ndarray               # (frames,) output speed, rad/s
+    #: the output speed at each eccentricity shown beside the drawn one: ((label, (frames,)
+    #: rad/s), ...), each label naming its δ (:mod:`optdesign.evaluation.ripples`)
+    outputs: tuple = ()
+    eccentricity: float = 1.0        # the drawn linkage's
+    crank_pivot: str | None = None   # the crank's fixed pivot, and its reach [mm]
+    crank_reach: float = 0.0
 
     def to_dict(self) -> dict:
         return {"names": list(self.names),
@@ -45,12 +51,17 @@ class Turn:
                 "phi": np.round(self.phi_deg, 4).tolist(),
                 "driving": self.driving.tolist(),
                 "speeds": np.round(self.speeds, 5).tolist(),
-                "output": np.round(self.output, 5).tolist()}
+                "output": np.round(self.output, 5).tolist(),
+                "eccentricity": self.eccentricity,
+                "crank": {"pivot": self.crank_pivot, "reach": round(self.crank_reach, 4)},
+                "outputs": [{"label": label, "speed": np.round(speed, 5).tolist()}
+                            for label, speed in self.outputs]}
 
 
 def turn(design, stroke: str, input_speed: float, eccentricity: float = 1.0,
-         frames: int = FRAMES) -> Turn:
-    """The :class:`Turn` of ``design`` over ``frames`` crank angles."""
+         frames: int = FRAMES, outputs: tuple = ()) -> Turn:
+    """The :class:`Turn` of ``design`` over ``frames`` crank angles; ``outputs``: ((e,
+    label), ...), the eccentricities whose output speed is drawn too, each labelled."""
     drawn = linkage(design, eccentricity, frames)
     phi = np.linspace(0.0, 2 * np.pi, frames, endpoint=False)
     kin = design.sample(phi, eccentricity)
@@ -66,8 +77,18 @@ def turn(design, stroke: str, input_speed: float, eccentricity: float = 1.0,
     links = frame + tuple((a, b, role, members.get((a, b)))
                           for (a, b), role in drawn.roles.items())
     positions = drawn.turn.transpose(0, 2, 1)                           # (frames, joints, 2)
+    shown = tuple((label, output if e == eccentricity else
+                   output_speed(design, stroke, input_speed, e, phi)) for e, label in outputs)
     return Turn(drawn.names, positions, links, np.degrees(phi), best % count, per_member,
-                output)
+                output, shown, float(eccentricity), pivot, drawn.crank_reach())
+
+
+def output_speed(design, stroke: str, input_speed: float, eccentricity: float,
+                 phi: np.ndarray) -> np.ndarray:
+    """The output speed [rad/s] of ``design`` at ``eccentricity`` over the crank angles
+    ``phi``."""
+    curves = driving_speeds(design.sample(phi, eccentricity)["dtheta"], stroke) * input_speed
+    return np.maximum(curves.max(axis=0), 0.0)
 
 
 def _rocker_members(drawn, theta: np.ndarray) -> dict:
@@ -95,11 +116,21 @@ def html_page(data: Turn, title: str) -> str:
     pad = 0.06 * float(max(high - low))
     box = [float(low[0] - pad), float(-high[1] - pad), float(high[0] - low[0] + 2 * pad),
            float(high[1] - low[1] + 2 * pad)]
-    top = float(max(data.speeds.max(), data.output.max())) * 1.08 or 1.0
+    top = float(max([data.speeds.max(), data.output.max()] +
+                    [speed.max() for _, speed in data.outputs])) * 1.08 or 1.0
     payload = json.dumps(data.to_dict() | {"colours": COLOURS, "top": top,
                                            "width": box[2]}, separators=(",", ":"))
-    return _PAGE.replace("__TITLE__", _escape(title)).replace(
-        "__VIEWBOX__", " ".join(f"{x:.4f}" for x in box)).replace("__DATA__", payload)
+    height = str(300 + 18 * len(data.outputs))
+    detail = ""
+    if data.crank_pivot is not None and 0 < data.crank_reach < ZOOM_BELOW * box[2]:
+        centre = data.positions[0, data.names.index(data.crank_pivot)]
+        half = 3 * data.crank_reach
+        detail = (f'<div><div>crank detail (× {box[2] / (2 * half):.0f})</div><svg id="detail" '
+                  f'width="240" height="240" viewBox="{centre[0] - half:.4f} '
+                  f'{-centre[1] - half:.4f} {2 * half:.4f} {2 * half:.4f}"></svg></div>')
+    return _PAGE.replace("__HEIGHT__", height).replace("__TITLE__", _escape(title)).replace(
+        "__VIEWBOX__", " ".join(f"{x:.4f}" for x in box)).replace(
+        "__DETAIL__", detail).replace("__DATA__", payload)
 
 
 def _escape(text: str) -> str:
@@ -126,25 +157,35 @@ style="background:#8c8c8c"></span>frame</div>
 <button id="toggle">pause</button>
 <div class="row">
 <svg id="linkage" width="560" height="560" viewBox="__VIEWBOX__"></svg>
-<svg id="speeds" width="560" height="300" viewBox="0 0 560 300"></svg>
+__DETAIL__
+<svg id="speeds" width="560" height="__HEIGHT__" viewBox="0 0 560 __HEIGHT__"></svg>
 </div>
 <script>
 const D = __DATA__;
 const NS = "http://www.w3.org/2000/svg";
 const L = document.getElementById("linkage"), S = document.getElementById("speeds");
+const Z = document.getElementById("detail");
 const idx = {}; D.names.forEach((n, i) => idx[n] = i);
-const w = D.width / 280;
 function el(parent, tag, attrs) {
   const e = document.createElementNS(NS, tag);
   for (const k in attrs) e.setAttribute(k, attrs[k]);
   parent.appendChild(e); return e;
 }
-const width = role => w * (role === "frame" ? 0.7 : role === "coupler" ? 1.2 : 2);
-const lines = D.links.map(([a, b, role]) => el(L, "line", {stroke: D.colours[role],
-  "stroke-width": width(role), "stroke-linecap": "round",
-  "stroke-dasharray": role === "frame" ? (4 * w) + "," + (3 * w) : "none"}));
-const dots = D.names.map(() => el(L, "circle", {r: w * 2.2, fill: "#fff", stroke: "#333",
-  "stroke-width": w * 0.6}));
+// the linkage, and the crank detail (a small crank magnified) when there is one
+const views = [[L, D.width / 280]];
+if (Z) views.push([Z, Z.viewBox.baseVal.width / 110]);
+const w = views[0][1];
+const width = (role, w) => w * (role === "frame" ? 0.7 : role === "coupler" ? 1.2 : 2);
+const drawn = views.map(([V, w]) => {
+  if (D.crank.pivot !== null) el(V, "circle", {cx: D.positions[0][idx[D.crank.pivot]][0],
+    cy: -D.positions[0][idx[D.crank.pivot]][1], r: D.crank.reach, fill: "none",
+    stroke: D.colours.crank, "stroke-width": w * 0.6, "stroke-dasharray": (3 * w) + "," + (2 * w)});
+  return {w: w, lines: D.links.map(([a, b, role]) => el(V, "line", {stroke: D.colours[role],
+    "stroke-width": width(role, w), "stroke-linecap": "round",
+    "stroke-dasharray": role === "frame" ? (4 * w) + "," + (3 * w) : "none"})),
+  dots: D.names.map(() => el(V, "circle", {r: w * 2.2, fill: "#fff", stroke: "#333",
+    "stroke-width": w * 0.6}))};
+});
 const x0 = 48, x1 = 548, y0 = 262, y1 = 24;
 const sx = p => x0 + (x1 - x0) * p / 360, sy = v => y0 - (y0 - y1) * Math.max(v, 0) / D.top;
 el(S, "line", {x1: x0, y1: y0, x2: x1, y2: y0, stroke: "#999"});
@@ -161,26 +202,37 @@ ticks.forEach(v => { const t = el(S, "text", {x: x0 - 4, y: sy(v) + 4, "font-siz
 const path = ys => ys.map((v, i) => sx(D.phi[i]) + "," + sy(v)).join(" ");
 D.speeds.forEach(ys => el(S, "polyline", {points: path(ys), fill: "none",
   stroke: "#2a8a2a", "stroke-opacity": 0.35, "stroke-width": 1}));
-el(S, "polyline", {points: path(D.output), fill: "none", stroke: "#111", "stroke-width": 2.2});
+const OC = ["#111", "#1f77b4", "#d62728", "#9467bd", "#8c564b"];
+const OD = ["none", "6,3", "2,2", "8,3,2,3", "4,4"];
+D.outputs.forEach((o, i) => { el(S, "polyline", {points: path(o.speed), fill: "none",
+  stroke: OC[i % 5], "stroke-width": 2, "stroke-dasharray": OD[i % 5]});
+  el(S, "line", {x1: x0, y1: 300 + 18 * i, x2: x0 + 28, y2: 300 + 18 * i, stroke: OC[i % 5],
+    "stroke-width": 2, "stroke-dasharray": OD[i % 5]});
+  const t = el(S, "text", {x: x0 + 34, y: 304 + 18 * i, "font-size": 11, "class": "output"});
+  t.textContent = o.label; });
+if (!D.outputs.length) el(S, "polyline", {points: path(D.output), fill: "none",
+  stroke: "#111", "stroke-width": 2.2});
 const cursor = el(S, "line", {y1: y0, y2: y1, stroke: "#ff7f0e", "stroke-width": 1.5});
 const mark = el(S, "circle", {r: 4, fill: "#ff7f0e"});
 const state = document.getElementById("state");
 let frame = 0, running = true, shown = 0;
 function draw(f) {
   const P = D.positions[f];
-  D.links.forEach(([a, b, role, member], i) => {
-    const p = P[idx[a]], q = P[idx[b]], ln = lines[i];
-    ln.setAttribute("x1", p[0]); ln.setAttribute("y1", -p[1]);
-    ln.setAttribute("x2", q[0]); ln.setAttribute("y2", -q[1]);
-    const drives = role === "rocker" && member === D.driving[f];
-    ln.setAttribute("stroke", drives ? D.colours.driving : D.colours[role]);
-    ln.setAttribute("stroke-width", drives ? w * 3.4 : width(role));
+  drawn.forEach(({w, lines, dots}) => {
+    D.links.forEach(([a, b, role, member], i) => {
+      const p = P[idx[a]], q = P[idx[b]], ln = lines[i];
+      ln.setAttribute("x1", p[0]); ln.setAttribute("y1", -p[1]);
+      ln.setAttribute("x2", q[0]); ln.setAttribute("y2", -q[1]);
+      const drives = role === "rocker" && member === D.driving[f];
+      ln.setAttribute("stroke", drives ? D.colours.driving : D.colours[role]);
+      ln.setAttribute("stroke-width", drives ? w * 3.4 : width(role, w));
+    });
+    D.names.forEach((n, i) => { dots[i].setAttribute("cx", P[i][0]);
+      dots[i].setAttribute("cy", -P[i][1]); });
   });
-  D.names.forEach((n, i) => { dots[i].setAttribute("cx", P[i][0]);
-    dots[i].setAttribute("cy", -P[i][1]); });
   cursor.setAttribute("x1", sx(D.phi[f])); cursor.setAttribute("x2", sx(D.phi[f]));
   mark.setAttribute("cx", sx(D.phi[f])); mark.setAttribute("cy", sy(D.output[f]));
-  state.textContent = "crank angle " + D.phi[f].toFixed(1) + "\u00b0 \u00b7 member " +
+  state.textContent = "e = " + D.eccentricity + " \u00b7 crank angle " + D.phi[f].toFixed(1) + "\u00b0 \u00b7 member " +
     (D.driving[f] + 1) + " drives \u00b7 output " + D.output[f].toFixed(3) + " rad/s";
   document.body.setAttribute("data-frames-shown", ++shown);
 }
@@ -222,12 +274,19 @@ def movie(data: Turn, title: str, path, fps: int = 24) -> None:
     joints = ax.plot([], [], "o", ms=3, mfc="white", mec="0.2")[0]
     for ys in data.speeds:
         bx.plot(data.phi_deg, ys, color=COLOURS["rocker"], alpha=0.35, lw=0.9)
-    bx.plot(data.phi_deg, data.output, color="black", lw=2)
-    top = float(max(data.speeds.max(), data.output.max())) * 1.08 or 1.0
+    if data.outputs:
+        for i, (label, speed) in enumerate(data.outputs):
+            bx.plot(data.phi_deg, speed, color="black" if i == 0 else f"C{i - 1}", lw=1.8,
+                    ls=("-", "--", "-.", ":")[i % 4], label=label)
+        bx.legend(fontsize=7, loc="lower center", bbox_to_anchor=(0.5, 1.0), frameon=False)
+    else:
+        bx.plot(data.phi_deg, data.output, color="black", lw=2)
+    top = float(max([data.speeds.max(), data.output.max()] +
+                    [speed.max() for _, speed in data.outputs])) * 1.08 or 1.0
     bx.set_ylim(0, top)
     bx.set_xlim(0, 360)
     bx.set_xticks(range(0, 361, 90))
-    bx.set_xlabel("crank angle φ1 [deg]")
+    bx.set_xlabel(f"crank angle φ1 [deg] (the linkage at e = {data.eccentricity:g})")
     bx.set_ylabel("speed [rad/s]")
     bx.grid(alpha=0.3)
     cursor = bx.axvline(0, color=COLOURS["driving"], lw=1.2)
@@ -318,8 +377,14 @@ def _width(role: str) -> float:
     return {"frame": 0.7, "coupler": 1.2}.get(role, 2.2)
 
 
-def turn_title(problem, design, figures) -> str:
-    """The page's and the movie's title: the name, the count and the exact δ and ratio."""
+def turn_title(problem, design, figures, named=None) -> str:
+    """The page's and the movie's title: the name, the count, the problem's δ named
+    (``named``: :class:`optdesign.evaluation.ripples.Ripples`; else the δ of ``figures``,
+    named by its eccentricity) and the ratio."""
+    from optdesign.evaluation.ripples import Ripple
+
     count = problem.model.count_variable
+    delta = named.worst if named is not None else \
+        Ripple(figures.ripple(problem.objective.ripple), problem.objective.ripple, None)
     return (f"{problem.name}: {problem.mechanism}, {count} = {design.count}, "
-            f"δ = {figures.delta:.4f}, ratio = {figures.ratio:.4f}")
+            f"{delta.text(4)}, ratio = {figures.ratio:.4f}")

@@ -55,8 +55,12 @@ def _build_kinematics(problem) -> None:
 
 
 def plot_speeds(design, stroke: str, input_speed: float, eccentricity: float = 1.0,
-                ax=None, n_samples: int = 1441, title: str | None = None):
-    """Each rocker's driving speed s·ω_k over the crank angle, and the output envelope."""
+                ax=None, n_samples: int = 1441, title: str | None = None,
+                outputs: list[tuple[float, str]] | None = None):
+    """Each rocker's driving speed s·ω_k over the crank angle at ``eccentricity``, and the
+    output envelope there; with ``outputs`` ([(e, label), ...], e.g. each listed
+    eccentricity labelled with its δ by :mod:`optdesign.evaluation.ripples`), the output
+    envelope at each of those eccentricities instead, each with its label."""
     plt = pyplot()
     fig, ax = (ax.figure, ax) if ax is not None else plt.subplots(figsize=(8, 4.5))
     phi = np.linspace(0, 2 * np.pi, n_samples)
@@ -66,12 +70,18 @@ def plot_speeds(design, stroke: str, input_speed: float, eccentricity: float = 1
         for k in range(dtheta.shape[0]):
             ax.plot(deg, s * dtheta[k] * input_speed, lw=0.9, alpha=0.6,
                     label=f"member {k + 1}" if s == STROKE_SIGNS[stroke][0] else None)
-    env = output_envelope(dtheta, stroke) * input_speed
-    ax.plot(deg, env, color="black", lw=2.4, label="output (envelope)")
-    lo, hi = env.min(), env.max()
-    ax.axhline(hi, color="black", ls=":", lw=0.8)
-    ax.axhline(lo, color="black", ls=":", lw=0.8)
-    ax.set_ylim(min(0.0, lo) - 0.05 * hi, hi * 1.08)
+    shown = outputs or [(eccentricity, "output (envelope)")]
+    styles = ["-", "--", "-.", ":"]
+    top, bottom = 0.0, 0.0
+    for i, (e, label) in enumerate(shown):
+        at = dtheta if e == eccentricity else design.sample(phi, e)["dtheta"]
+        env = output_envelope(at, stroke) * input_speed
+        line, = ax.plot(deg, env, color="black" if i == 0 else f"C{i - 1}", lw=2.4,
+                        ls=styles[i % len(styles)], label=label)
+        for y in (env.min(), env.max()):
+            ax.axhline(y, color=line.get_color(), ls=":", lw=0.8)
+        top, bottom = max(top, env.max()), min(bottom, env.min())
+    ax.set_ylim(bottom - 0.05 * top, top * 1.08)
     ax.set_xlim(0, 360)
     ax.set_xticks(range(0, 361, 45))
     ax.set_xlabel("crank angle φ1 [deg]")
@@ -79,8 +89,21 @@ def plot_speeds(design, stroke: str, input_speed: float, eccentricity: float = 1
                   f"speed in the {stroke} direction [rad/s]")
     ax.set_title(title or f"{stroke} stroke, eccentricity {eccentricity:g}")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, ncol=5, loc="upper center", bbox_to_anchor=(0.5, -0.14),
-              frameon=False)
+    if not outputs:
+        ax.legend(fontsize=7, ncol=5, loc="upper center", bbox_to_anchor=(0.5, -0.14),
+                  frameon=False)
+        return fig
+    # the outputs' labels are long: one line each, under the members' legend
+    members = dtheta.shape[0]
+    handles, labels = ax.get_legend_handles_labels()
+    rows = -(-members // 6)
+    ax.add_artist(ax.legend(handles[:members], labels[:members], fontsize=7,
+                            ncol=min(6, members), loc="upper center",
+                            bbox_to_anchor=(0.5, -0.14), frameon=False,
+                            title=f"each member's driving speed at e = {eccentricity:g}",
+                            title_fontsize=7))
+    ax.legend(handles[members:], labels[members:], fontsize=8, ncol=1, loc="upper center",
+              bbox_to_anchor=(0.5, -0.2 - 0.045 * rows), frameon=False)
     return fig
 
 

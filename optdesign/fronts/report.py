@@ -420,6 +420,13 @@ def summary_text(result) -> str:
     lines = [f"{len(result.points)} points, {int(status.isin(VERIFIED).sum())} verified feasible"
              + (f" ({local} local: a known design beats them on their own ε)" if local else "")
              + f"; {ind['n_points']} non-dominated over every phase count"]
+    if "round" in result.points:
+        rounds = result.points["round"].fillna(0)
+        uniform = int((rounds == 0).sum())
+        lines.append(f"  of the {len(result.points)}: {uniform} from the uniform ε pass "
+                     f"(pareto.points per count), {len(result.points) - uniform} added where "
+                     f"the front is coarse (pareto.refine; enabled: false keeps the uniform "
+                     f"pass alone)")
     for n, v in result.per_count.items():
         lines.append(f"  n = {n}: {v['n_points']} non-dominated, hypervolume "
                      f"{_fmt(v['hypervolume'])}, spacing {_fmt(v['spacing'])}"

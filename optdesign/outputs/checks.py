@@ -76,13 +76,17 @@ def resolve_out(out: str | Path | None, name: str, suffix: str = "",
 
 
 def prepare_out(out: str | Path | None, name: str, suffix: str = "",
-                files: tuple[str, ...] = (), option: str = "--out") -> Path:
+                files: tuple[str, ...] = (), option: str = "--out", source=None,
+                force: bool = False, record: bool = True) -> Path:
     """The output folder of a command (:func:`resolve_out`), made and checked writable
     before any work.
 
-    ``files`` are the names the command will write there: none may be a folder. Raises
-    :class:`UsageError` (exit 2) naming the folder (as ``option``, the flag or the API's
-    argument, gave it) and the reason.
+    ``files`` are the names the command will write there: none may be a folder. With
+    ``source`` (the problem file), a folder holding the results of another problem file is
+    refused unless ``force``, and (with ``record``: a command that writes in place) the folder
+    is recorded as ``source``'s (:mod:`optdesign.outputs.provenance`; a command that writes
+    its set whole records it in the set). Raises :class:`UsageError` (exit 2) naming the
+    folder (as ``option``, the flag or the API's argument, gave it) and the reason.
     """
     path, label = resolve_out(out, name, suffix, option)
     try:
@@ -99,4 +103,8 @@ def prepare_out(out: str | Path | None, name: str, suffix: str = "",
         if (path / name_).is_dir():
             raise UsageError(f"{label}: {name_} there is a folder; the command writes a file "
                              f"of that name")
+    if source is not None:
+        from optdesign.outputs.provenance import claim
+
+        claim(path, label, source, force, record)
     return path

@@ -52,6 +52,7 @@ from optdesign.errors import ProblemError
 from optdesign.outputs.atomic import atomic_write_json
 from optdesign.outputs.attributes import take_on
 from optdesign.outputs.links import followed
+from optdesign.outputs.provenance import SOURCE, record
 
 #: in a set marked for commit: the names its command owns
 MARKER = ".optdesign-set.json"
@@ -71,14 +72,19 @@ class OutputFolder:
         The folder, as the user named it (messages quote it so).
     owned : iterable of str
         The names of every file the command may write there; anything else is the user's.
+    source : path, optional
+        The problem file the run's results come from: recorded in its set
+        (:mod:`optdesign.outputs.provenance`); without it the folder's record is kept.
     """
 
-    def __init__(self, path: str | Path, owned: Iterable[str]):
+    def __init__(self, path: str | Path, owned: Iterable[str], source=None):
         self.shown = Path(path)
         # a planted link is refused here too, not only by the check before the work: the
         # folder is claimed minutes later, and may be replaced as a whole
         self.path = Path(followed(path, str(path)))
-        self.owned = frozenset(owned)
+        # the record of the problem file the results came from goes with every set
+        self.owned = frozenset(owned) | {SOURCE}
+        self.source = source
         self._lock_fd: int | None = None
 
     # ------------------------------------------------------------------ lock
@@ -164,6 +170,10 @@ class OutputFolder:
             # the set keeps the folder's owner, group, mode and extended attributes; where
             # the sibling cannot be given them, it is committed into the folder instead
             kept = take_on(self.path, staging) if self.path.is_dir() else True
+            if self.source is not None:
+                record(staging, self.source)
+            elif _is_regular(self.path / SOURCE):
+                shutil.copyfile(self.path / SOURCE, staging / SOURCE)
             written = write(staging)
             _fsync_dir(staging)
             if kept and self._holds_only_owned() and not self._holds_working_folder():
@@ -184,8 +194,10 @@ class OutputFolder:
         """Remove the previous run's files (every owned name), for a command that writes in
         place; the user's files stay."""
         self._require_lock()
-        for name in self.owned:
+        for name in self.owned - {SOURCE}:
             (self.path / name).unlink(missing_ok=True)
+        if self.source is not None:
+            record(self.path, self.source)
 
     # ------------------------------------------------------------------ steps
     def _exchange_in(self, staging: Path, token: str) -> None:

@@ -32,9 +32,10 @@ GAP = 8
 
 
 def save_split(build: Callable, bands: tuple[str, str], path: str | Path, dpi: float = 120,
-               split: bool = True) -> Path:
+               split: bool = True, metadata: dict | None = None) -> Path:
     """The figure ``build(bands=bands)`` saved as a PNG at ``path``, as ``atomic_savefig(fig,
-    path, dpi=dpi)`` saves it; with ``split``, rendered as its two ``bands`` (upper, lower:
+    path, dpi=dpi, metadata=metadata)`` saves it (``metadata``: the PNG's text); with
+    ``split``, rendered as its two ``bands`` (upper, lower:
     ``build(bands=(upper,))`` and ``build(bands=(lower,))``) by this process and one forked
     from it.
 
@@ -43,8 +44,8 @@ def save_split(build: Callable, bands: tuple[str, str], path: str | Path, dpi: f
     if split and hasattr(os, "fork"):
         rgba = _joined(build, bands, dpi)
         if rgba is not None:
-            return atomic_write_bytes(path, _png(rgba, dpi))
-    return _saved(build(bands=bands), path, dpi)
+            return atomic_write_bytes(path, _png(rgba, dpi, metadata))
+    return _saved(build(bands=bands), path, dpi, metadata)
 
 
 def _joined(build: Callable, bands: tuple[str, str], dpi: float):
@@ -131,18 +132,18 @@ def _blank(rows, background) -> bool:
     return bool((rows == background).all())
 
 
-def _png(rgba, dpi: float) -> bytes:
+def _png(rgba, dpi: float, metadata: dict | None = None) -> bytes:
     """``rgba`` as the PNG savefig writes of it."""
     from matplotlib.image import imsave
 
     buf = io.BytesIO()
-    imsave(buf, memoryview(rgba), format="png", origin="upper", dpi=dpi)
+    imsave(buf, memoryview(rgba), format="png", origin="upper", dpi=dpi, metadata=metadata)
     return buf.getvalue()
 
 
-def _saved(fig, path, dpi: float) -> Path:
+def _saved(fig, path, dpi: float, metadata: dict | None = None) -> Path:
     try:
-        return atomic_savefig(fig, path, dpi=dpi)
+        return atomic_savefig(fig, path, dpi=dpi, metadata=metadata)
     finally:
         _close(fig)
 

@@ -119,6 +119,9 @@ UNITS: dict[str, str] = {
     "engaged_share": "- (share of the cycle's time)",
     "rtol": "-", "atol": "rad", "cycles": COUNT, "period_turns": COUNT, "steps": COUNT,
     "events": COUNT, "counters": "- (counts)",
+    "pulses_per_turn": COUNT, "harmonic": "- (k of the k-th pulse harmonic)",
+    "relative_gap": "- (|harmonic / natural frequency - 1|)",
+    "delta_ratio": "- (dynamic delta / kinematic delta)",
 }
 
 #: a key ending so has this unit (longest suffix first)
@@ -211,3 +214,9 @@ def gear_ratio_text(ratio, digits: int = 4) -> str:
     if ratio is None or ratio != ratio:
         return "-"
     return "inf" if ratio <= 0 else f"{1.0 / ratio:.{digits}f}"
+
+
+def input_speed_text(omega: float) -> str:
+    """The crank speed ω1 in rad/s and in rpm, "ω1 = 15.18 rad/s (145 rpm)": what every
+    command's first line states, so that a speed given in rpm shows at once."""
+    return f"ω1 = {omega:g} rad/s ({omega * 30 / 3.141592653589793:.4g} rpm)"

@@ -5,13 +5,20 @@ Lengths are in millimetres, angles in degrees and speeds in rad/s. A length unde
 speed over 1000 rad/s are each accepted and solved, and named with the likely mistake (metres,
 radians, rpm): one :class:`~optdesign.errors.UnitWarning` per file, every suspicious key in it.
 A correct file warns of nothing, so it needs no ``units:`` to be silent.
+
+Fractions given in per cent. A ratio (output / input speed) and a ripple δ are fractions. A
+ratio bound above 1 is warned ("per cent?"): only an overdrive linkage, whose output outruns
+the crank, reaches it; one above 10 is refused, no converter of these gears up tenfold. A
+ripple bound (``max_ripple``, ``constraints.ripple``) above 1 is warned, never refused: the
+midrange δ = (ω_max − ω_min)/((ω_max + ω_min)/2) never exceeds 2, so a cap above it never
+binds (a file may mean "no cap" by it).
 """
 from __future__ import annotations
 
 import math
 import warnings
 
-from optdesign.errors import UnitWarning
+from optdesign.errors import ProblemError, UnitWarning
 
 #: lengths below this (mm) are likely metres or centimetres
 SHORTEST_MM = 1.0
@@ -23,9 +30,53 @@ SMALLEST_ANGLE_DEG = 2.0
 FASTEST_INPUT = 1000.0
 
 
+#: fraction bounds: quantity -> (above this warned, above this refused)
+FRACTION_LIMITS = {"ratio": (1.0, 10.0), "ripple": (1.0, math.inf)}
+
+
+def fraction_bounds(problem) -> list[tuple[str, str, float]]:
+    """(key as the file wrote it, quantity, value) of every bound on a fraction (the ratio,
+    the ripple) the problem holds."""
+    spelled = problem.constraints.spelled
+    out = []
+    if problem.objective.min_ratio:
+        out.append((spelled.get("min_ratio", "objective.min_ratio"), "ratio",
+                    problem.objective.min_ratio))
+    if problem.objective.max_ripple is not None:
+        out.append((spelled.get("max_ripple", "objective.max_ripple"), "ripple",
+                    problem.objective.max_ripple))
+    for bound in problem.constraints.quantities:
+        if bound.name in FRACTION_LIMITS:
+            for side in ("lower", "upper"):
+                value = getattr(bound, side)
+                if math.isfinite(value):
+                    out.append((f"constraints.{bound.key}.{side}", bound.name, value))
+    return out
+
+
+def _fraction_text(key: str, name: str, value: float) -> str:
+    what = "ratio (output / input speed)" if name == "ratio" else "ripple δ"
+    return (f"{key}: {value:g} is a {what}, a fraction (per cent? {value:g} % is "
+            f"{value / 100:g})")
+
+
+def refuse_per_cent(problem) -> None:
+    """ProblemError for a fraction bound past what any design reaches (FRACTION_LIMITS):
+    almost surely per cent."""
+    for key, name, value in fraction_bounds(problem):
+        if value > FRACTION_LIMITS[name][1]:
+            raise ProblemError(f"{problem.source}: {_fraction_text(key, name, value)}; above "
+                               f"{FRACTION_LIMITS[name][1]:g} no design reaches it")
+
+
 def implausible(problem) -> list[str]:
     """What in ``problem`` looks like a unit mistake, one phrase per key."""
     out = []
+    for key, name, value in fraction_bounds(problem):
+        if FRACTION_LIMITS[name][0] < value <= FRACTION_LIMITS[name][1]:
+            extra = "; a ratio above 1 is an overdrive, which few linkages reach" \
+                if name == "ratio" else "; the midrange δ never exceeds 2"
+            out.append(_fraction_text(key, name, value) + extra)
     small, large = {}, {}
     for name in problem.model.lengths:
         v = problem.design[name]

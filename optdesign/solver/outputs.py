@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from optdesign.evaluation.sensitivity import sensitivity_line
-from optdesign.outputs.units import gear_ratio_text
+from optdesign.outputs.units import gear_ratio_text, input_speed_text
 from optdesign.quantities import get_quantity
 from optdesign.quantities.criteria import (LengthConstraint, constraints_of, objective_of,
                                            quantity_specs)
@@ -12,19 +12,19 @@ def summary_text(result, problem) -> str:
     """A short plain-text account of a solve, for the terminal and summary.txt."""
 
     lines = [f"{problem.name}: {result.status} ({problem.mechanism}, {problem.stroke} stroke, "
-             f"ω1 = {problem.input_speed:g} rad/s)"]
+             f"{input_speed_text(problem.input_speed)})"]
     if result.design:
         lengths = set(problem.model.lengths)
         lines.append("design: " + ", ".join(f"{k} = {v:.4f} mm" if k in lengths else
                                             f"{k} = {v:g}" for k, v in result.design.items()))
-        where = f"e = {', '.join(f'{e:g}' for e in problem.eccentricities)}"
-        if problem.eccentricity_range is not None and result.worst_eccentricity is not None:
-            lower, upper = problem.eccentricity_range
-            where = f"e in [{lower:g}, {upper:g}], at e = {result.worst_eccentricity:.4f}"
-        lines.append(f"δ ({problem.objective.ripple}, worst over {where}) = "
-                     f"{result.delta:.6f}; ratio = {result.ratio:.6f} (output/input speed; "
+        named = result.ripples()
+        delta = named.worst.text(6) if named is not None else \
+            f"δ ({problem.objective.ripple}) = {result.delta:.6f}"
+        lines.append(f"{delta}; ratio = {result.ratio:.6f} (output/input speed; "
                      f"gear ratio i = 1/ratio = {gear_ratio_text(result.ratio)}); least "
                      f"transmission angle = {result.min_transmission_angle_deg:.2f} deg")
+        if named is not None and len(named.each) > 1:
+            lines.append("δ at each: " + "; ".join(r.text(6) for r in named.each))
         values = (result.quantities or {}).get("values", {})
         over = "the listed eccentricities" if problem.eccentricity_range is None else \
             "the listed eccentricities and the interval"

@@ -112,6 +112,17 @@ class SolveResult(Tabular):
     #: every quantity's exact value of the best design (see PhaseResult.quantities)
     quantities: dict = field(default_factory=dict)
 
+    def ripples(self):
+        """The optimum's δ named (:class:`optdesign.evaluation.ripples.Ripples`): the worst
+        over the listed eccentricities (or the interval) and where it falls, and δ at each;
+        None without an optimum."""
+        from optdesign.evaluation.ripples import ripples_of_quantities
+
+        objective = self.objective or {}
+        interval = objective.get("eccentricity_range")
+        return ripples_of_quantities(objective.get("ripple", "midrange"), self.quantities,
+                                     tuple(interval) if interval else None)
+
     # ------------------------------------------------- scipy.optimize.OptimizeResult's names
     @property
     def success(self) -> bool:
@@ -196,6 +207,9 @@ class SolveResult(Tabular):
         out = asdict(self)
         out["per_phase"] = [p.to_dict() for p in self.per_phase]
         out["sensitivities"] = self.sensitivities
+        named = self.ripples()
+        if named is not None:
+            out["delta_named"] = named.to_dict()
         sections = out.pop("sections")
         out.update(sections)
         return stamped(out, design_units(self.mechanism))

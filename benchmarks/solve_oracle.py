@@ -1,6 +1,6 @@
 """The solver's verdicts against a brute-force oracle, on several hundred random problems.
 
-    python benchmarks/solve_oracle.py [--problems 300] [--seed 0] [--resume]
+    python benchmarks/solve_oracle.py [--problems 300] [--seed 0] [--resume] [--table-only]
 
 Each problem is drawn by ``benchmarks/oracle.py`` (a mechanism, a box spanning one to six
 decades with or without initial values, a count, a stroke, random bounds on random quantities
@@ -90,14 +90,17 @@ def main(argv=None) -> int:
     ap.add_argument("--problems", type=int, default=300)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--resume", action="store_true")
+    ap.add_argument("--table-only", action="store_true",
+                    help="the table of the rows written so far (and the verdict cost)")
     args = ap.parse_args(argv)
     path = RESULTS / "solve_oracle.json"
-    rows = json.loads(path.read_text())["rows"] if args.resume and path.exists() else []
+    rows = json.loads(path.read_text())["rows"] \
+        if (args.resume or args.table_only) and path.exists() else []
     rng = np.random.default_rng(args.seed)
     draws = [oracle.random_draw(rng, i) for i in range(args.problems)]
     meta = {"time": time.strftime("%Y-%m-%d %H:%M:%S"), "python": platform.python_version(),
             "machine": f"{platform.machine()} {platform.system()}", "seed": args.seed}
-    for draw in draws[len(rows):]:
+    for draw in [] if args.table_only else draws[len(rows):]:
         rows.append(oracle.run(draw))
         atomic_write_text(path, json.dumps({"meta": meta, "rows": rows}, indent=1))
         r = rows[-1]

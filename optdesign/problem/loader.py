@@ -21,7 +21,7 @@ from optdesign.envelope.sampled import STROKE_SIGNS
 from optdesign.errors import ProblemError, shown
 from optdesign.limits import COUNTS
 from optdesign.mechanisms import get_mechanism, known
-from optdesign.problem.plausibility import refuse_per_cent, warn_implausible
+from optdesign.problem.plausibility import warn_implausible
 from optdesign.problem.yaml_text import parse, read_text
 from optdesign.quantities import known as known_quantities
 from optdesign.quantities.bounds import ALIASES, declarations as quantity_declarations, read_bound
@@ -516,7 +516,6 @@ def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "pro
         mech.check_values(problem.start_values(), count)
     except ProblemError as exc:
         raise ProblemError(f"{where}: {exc}") from None
-    refuse_per_cent(problem)
     warn_implausible(problem)
     return problem
 

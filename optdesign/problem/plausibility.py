@@ -8,7 +8,8 @@ A correct file warns of nothing, so it needs no ``units:`` to be silent.
 
 Fractions given in per cent. A ratio (output / input speed) and a ripple δ are fractions. A
 ratio bound above 1 is warned ("per cent?"): only an overdrive linkage, whose output outruns
-the crank, reaches it; one above 10 is refused, no converter of these gears up tenfold. A
+the crank, reaches it. It is not refused: the solve tells, at the cost of one relaxed solve,
+that it is out of reach and how far (the largest ratio any design in the box reaches). A
 ripple bound (``max_ripple``, ``constraints.ripple``) above 1 is warned, never refused: the
 midrange δ = (ω_max − ω_min)/((ω_max + ω_min)/2) never exceeds 2, so a cap above it never
 binds (a file may mean "no cap" by it).
@@ -30,8 +31,8 @@ SMALLEST_ANGLE_DEG = 2.0
 FASTEST_INPUT = 1000.0
 
 
-#: fraction bounds: quantity -> (above this warned, above this refused)
-FRACTION_LIMITS = {"ratio": (1.0, 10.0), "ripple": (1.0, math.inf)}
+#: fraction bounds: quantity -> above this warned
+FRACTION_LIMITS = {"ratio": 1.0, "ripple": 1.0}
 
 
 def fraction_bounds(problem) -> list[tuple[str, str, float]]:
@@ -60,20 +61,11 @@ def _fraction_text(key: str, name: str, value: float) -> str:
             f"{value / 100:g})")
 
 
-def refuse_per_cent(problem) -> None:
-    """ProblemError for a fraction bound past what any design reaches (FRACTION_LIMITS):
-    almost surely per cent."""
-    for key, name, value in fraction_bounds(problem):
-        if value > FRACTION_LIMITS[name][1]:
-            raise ProblemError(f"{problem.source}: {_fraction_text(key, name, value)}; above "
-                               f"{FRACTION_LIMITS[name][1]:g} no design reaches it")
-
-
 def implausible(problem) -> list[str]:
     """What in ``problem`` looks like a unit mistake, one phrase per key."""
     out = []
     for key, name, value in fraction_bounds(problem):
-        if FRACTION_LIMITS[name][0] < value <= FRACTION_LIMITS[name][1]:
+        if value > FRACTION_LIMITS[name]:
             extra = "; a ratio above 1 is an overdrive, which few linkages reach" \
                 if name == "ratio" else "; the midrange δ never exceeds 2"
             out.append(_fraction_text(key, name, value) + extra)

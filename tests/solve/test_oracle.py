@@ -9,19 +9,13 @@ A small draw runs here (derandomised: the same problems on every run; boxes of o
 decades, the wider ones being slow to solve); ``python benchmarks/solve_oracle.py``
 runs several hundred with boxes of up to six decades.
 """
-import importlib.util
-import sys
 
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tests.conftest import ROOT
+from benchmarks import oracle
 
-_spec = importlib.util.spec_from_file_location("oracle", ROOT / "benchmarks" / "oracle.py")
-oracle = importlib.util.module_from_spec(_spec)
-sys.modules.setdefault("oracle", oracle)
-_spec.loader.exec_module(oracle)
 
 
 @st.composite

@@ -124,3 +124,19 @@ def test_an_assembly_failure_crosses_a_process_boundary():
     error = AssemblyError(2, 137.5, "the rod is too short")
     again = pickle.loads(pickle.dumps(error))
     assert (again.chain, again.phi_deg, str(again)) == (2, 137.5, str(error))
+
+
+def test_a_bound_no_design_reaches_is_infeasible_at_every_count_never_failed():
+    """What an atlas cell of min_ratio 1e99 meets at each count (one of them used to end
+    failed): the relaxed solve first, and a verdict with the reachable ratio."""
+    from optdesign.solver.driver import solve_phase
+
+    data = _shipped("sharkov2022_disc")
+    data["objective"]["min_ratio"] = 1e99
+    with warnings.catch_warnings():            # "per cent?"
+        warnings.simplefilter("ignore")
+        problem = problem_from_dict(data, where="disc.yaml")
+    for count in (4, 8):
+        phase = solve_phase(problem, count)
+        assert phase.status == "infeasible", phase.message
+        assert 0.6 < phase.reachable["value"] < 0.8

@@ -32,7 +32,7 @@ from optdesign.problem.loader import problem_from_dict
 from optdesign.quantities import get_quantity
 from optdesign.quantities.criteria import objective_of
 from optdesign.solver import solve, verify
-from optdesign.solver.screening import sampled_scores
+from optdesign.solver.screening import sampled_scores, spread
 
 ROOT = __import__("pathlib").Path(__file__).resolve().parents[1]
 
@@ -84,7 +84,7 @@ def problem_data(draw: Draw) -> dict:
         v = problem.design[k]
         centre = math.sqrt(v.lower * v.upper)
         span = 10 ** draw.decades
-        lower = centre / span ** (1 - draw.centre) * 1.0
+        lower = centre / span ** (1 - draw.centre)
         upper = lower * span
         lower, upper = _valid(draw.mechanism, k, lower, upper, problem)
         entry = {"lower": float(lower), "upper": float(upper)}
@@ -179,10 +179,7 @@ def _box_sample(problem, n: int, seed: int):
     lower = np.array([problem.design[k].lower for k in free])
     upper = np.array([problem.design[k].upper for k in free])
     unit = np.random.default_rng(seed).random((n, len(free)))
-    wide = upper >= 100 * lower
-    X = lower + unit * (upper - lower)
-    X[:, wide] = lower[wide] * (upper[wide] / lower[wide]) ** unit[:, wide]
-    return X, problem.counts()[0]
+    return spread(unit, lower, upper), problem.counts()[0]
 
 
 @dataclass

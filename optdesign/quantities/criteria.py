@@ -302,13 +302,13 @@ def spec_sides(problem, specs) -> dict[str, frozenset[str]]:
     return out
 
 
-def spec_forms(problem, specs) -> dict[str, frozenset[str]]:
-    """Per spec key, the NLP forms it needs: ``natural`` for its natural side (and where
-    nothing bounds it: it is read over the regulation interval), ``attained`` for the
-    other."""
+def spec_forms(problem, specs, sides: dict) -> dict[str, frozenset[str]]:
+    """Per spec key, the NLP forms it needs (``sides``: :func:`spec_sides`): ``natural`` for
+    its natural side (and where nothing bounds it: it is read over the regulation interval),
+    ``attained`` for the other."""
     out = {}
     bounded = {s.key for s in problem.constraints.quantities}   # a row each, always
-    for key, sides in spec_sides(problem, specs).items():
+    for key, sides in sides.items():
         natural = get_quantity(next(s.name for s in specs if s.key == key)).natural_side()
         forms = {"natural"} if natural in sides or key in bounded else set()
         out[key] = frozenset(forms | ({"attained"} if sides - {natural} else set()) or
@@ -392,9 +392,9 @@ class QuantityConstraint(Constraint):
 
     def key(self, problem):
         """``constraints.ratio.upper``: the side where one is given alone."""
-        sides = [side for side in ("lower", "upper")
-                 if math.isfinite(getattr(self.spec, side))]
-        return f"constraints.{self.spec.name}" + (f".{sides[0]}" if len(sides) == 1 else "")
+        sides = bounded_sides(self.spec)
+        return f"constraints.{self.spec.name}" + (f".{next(iter(sides))}" if len(sides) == 1
+                                                  else "")
 
 
 class SectionConstraint(Constraint):

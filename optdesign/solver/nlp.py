@@ -380,13 +380,14 @@ class PhaseNLP:
         self.turn: list[str] = []
         #: per spec, the forms its bounds and the objective read: ``natural`` (conservative
         #: towards the quantity's natural side) and ``attained`` (for the other side)
-        self.forms = spec_forms(problem, self.specs)
+        sides = spec_sides(problem, self.specs)
+        self.forms = spec_forms(problem, self.specs, sides)
         #: what they need held exactly beyond the conservative forms (a cap on the ratio: the
         #: hand-over angles at the curves' crossings)
-        sides = spec_sides(problem, self.specs)
         self.needs = frozenset().union(*(get_quantity(s.name).nlp_needs(sides[s.key])
                                          for s in self.specs))
-        #: the picks of the attained forms: (parameter, candidates, worst, tag, slot mask)
+        #: the picks of the attained forms, (name, candidates, worst, block tag, among the
+        #: active hand-over slots only), and each one's one-hot parameter by name
         self._picks: list[tuple] = []
         self._pick_params: dict = {}
         #: (quantity, block tag) of every block that tracks a quantity's figures
@@ -559,11 +560,9 @@ class PhaseNLP:
         """Σ pick_i · candidates_i with ``pick`` a one-hot parameter ``name``, set at each
         run's start on the candidate that is worst there (:meth:`with_picks`; ``slots``: among
         the active hand-over slots of block ``tag`` only); made once per name."""
-        made = next((p for p in self._picks if p[0] == name), None)
-        if made is None:
-            made = (name, b.parameter(name, candidates.numel()), worst, tag, slots)
+        if name not in self._pick_params:
+            self._pick_params[name] = b.parameter(name, candidates.numel())
             self._picks.append((name, candidates, worst, tag, slots))
-            self._pick_params[name] = made[1]
         return ca.dot(self._pick_params[name], candidates)
 
     def _track(self, b: "_Builder", block: EccentricityBlock) -> None:
@@ -625,13 +624,12 @@ class PhaseNLP:
         last = b.parameter(f"last_{tag}", M)
         th_x, dth_x = slot_map(phi_x.T, pvec)
         f_x, th = self._stack(dth_x / e), self._stack(th_x)
-        b.row(f"trough_handovers[{tag}]", ca.vertcat(ca.sum1(before * f_x).T - w_lo,
-                                                     ca.sum1(after * f_x).T - w_lo))
+        f_before, f_after = ca.sum1(before * f_x).T, ca.sum1(after * f_x).T
+        b.row(f"trough_handovers[{tag}]", ca.vertcat(f_before - w_lo, f_after - w_lo))
         if "exact_handovers" in self.needs:
             # each active hand-over at the crossing of its two curves: the runs' angle
             # increments are then the exact mean, not a lower estimate
-            b.row(f"handover_crossings[{tag}]", ca.sum1(before * f_x).T -
-                  ca.sum1(after * f_x).T)
+            b.row(f"handover_crossings[{tag}]", f_before - f_after)
         th_start = ca.sum1(after * th).T
         th_next = ca.sum1(after * ca.horzcat(th[:, 1:], th[:, :1])).T
         th_first = ca.sum1(after * ca.repmat(th[:, 0], 1, M)).T
@@ -645,8 +643,8 @@ class PhaseNLP:
         self._derived[f"run_sums_{tag}"] = ca.cumsum(increments)
         block.w_hi, block.w_lo, block.cos_sq = w_hi, w_lo, cos_sq
         block.mean = sums[M - 1] / (2 * math.pi * e)
-        block.ripple = ripple_of(w_hi, w_lo, block.mean, self.problem.objective.ripple)
-        block.peaks, block.troughs = f_m, ca.sum1(before * f_x).T
+        block.ripple = block.ripple_of(w_hi, w_lo)
+        block.peaks, block.troughs = f_m, f_before
         return block
 
     def solver(self, hessian: str) -> ca.Function:

@@ -153,25 +153,27 @@ def toward_feasible(problem, count: int, base: dict, free: list, lower, upper, X
     feasible designs rank first, by their score, Deb's rules). Deterministic: seeded by
     ``solver.seed``."""
     rng = np.random.default_rng(problem.solver.seed)
-    rows = [_relative_to_regulated(problem, base, free, lower, upper, rng)]
+    batch = _relative_to_regulated(problem, base, free, lower, upper, rng)
     Xs, scores, violations = [X], [score], [violation]
     log_lo, log_hi = np.log(lower), np.log(upper)
     for _ in range(FEASIBILITY_ROUNDS + 1):
-        if rows[-1] is not None and len(rows[-1]):
-            s, v = sampled_scores(problem, count, base, free, rows[-1])
-            Xs.append(rows[-1]), scores.append(s), violations.append(v)
+        if batch is not None:
+            s, v = sampled_scores(problem, count, base, free, batch)
+            Xs.append(batch)
+            scores.append(s)
+            violations.append(v)
         every, v = np.vstack(Xs), np.concatenate(violations)
         if np.sum(v <= 0) >= ENOUGH_FEASIBLE:
             break
         ranked = np.lexsort((np.where(v <= 0, np.concatenate(scores), v), ~(v <= 0)))
         elites = np.log(every[ranked[:ELITES]][np.isfinite(v[ranked[:ELITES]])])
         if not len(elites):          # nothing assembles yet: the box again, in its logarithm
-            rows.append(np.exp(rng.uniform(log_lo, log_hi, (FEASIBILITY_BATCH, len(free)))))
+            batch = np.exp(rng.uniform(log_lo, log_hi, (FEASIBILITY_BATCH, len(free))))
             continue
         spread_ = np.maximum(elites.std(axis=0), LEAST_SPREAD)
         centres = elites[rng.integers(len(elites), size=FEASIBILITY_BATCH)]
         z = centres + rng.normal(0.0, 1.0, centres.shape) * spread_
-        rows.append(np.exp(np.clip(z, log_lo, log_hi)))
+        batch = np.exp(np.clip(z, log_lo, log_hi))
     return np.vstack(Xs), np.concatenate(scores), np.concatenate(violations)
 
 

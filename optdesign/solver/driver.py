@@ -31,6 +31,7 @@ from optdesign.quantities.criteria import (LengthConstraint, bound_excess, const
 from optdesign.solver.accuracy import solve_accuracy
 from optdesign.solver.nlp import Held, PhaseNLP, SECONDARY_BUDGET, is_robust
 from optdesign.solver.reachable import reach_of
+from optdesign.solver.refine import refine
 from optdesign.solver.result import PhaseResult, SolveResult, StartRecord
 from optdesign.solver.robust import (next_scenarios, robust_verdict, screened_cases,
                                      worst_cases)
@@ -38,6 +39,7 @@ from optdesign.solver.screening import line_seeds, screen
 from optdesign.solver.verify import TOL_ANGLE_DEG, Verification, start_guess, verify
 
 SUCCESS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+ACCEPTABLE = SUCCESS[1]
 #: the status of a run stopped because it entered a known optimum's neighbourhood
 JOINED = "Joined_Known_Basin"
 #: the status of a run stopped while still far from feasible (nlp.STALL_AFTER iterations)
@@ -203,6 +205,11 @@ class PhaseSolver:
                 values, ver = (trial, new) if new.sequences else (values, ver)
                 break
             given, (values, ver) = ver.sequences, (trial, new)
+            if status == ACCEPTABLE and hessian == "limited-memory" and not secondary:
+                # stopped at IPOPT's looser tolerance (a flat valley, an optimum at the box's
+                # far edge): on from here with the exact Hessian, to the full tolerance
+                hessian = "exact"
+                continue
             moved = next_held(problem, ver)
             if moved != held:
                 if regulation_steps < MAX_REGULATION_STEPS:
@@ -268,7 +275,8 @@ class PhaseSolver:
             problem = tightened(problem, bound)
         return problem
 
-    def as_it_is(self, values: dict, min_ratio=None, max_ripple=None, bound=None) -> Outcome:
+    def as_it_is(self, values: dict, min_ratio=None, max_ripple=None, bound=None,
+                 note: str = "the start itself, verified under the point's bounds") -> Outcome:
         """``values`` verified exactly under the point's bounds, without a polish: a known
         design that meets them is itself a candidate for the point (IPOPT from it may end in
         a worse local optimum)."""
@@ -276,7 +284,7 @@ class PhaseSolver:
         ver = self.verify(problem, values)
         record = StartRecord(start=dict(values), ipopt_status=AS_IT_IS, iterations=0,
                              time_s=0.0, feasible=bool(ver.feasible), delta=ver.delta,
-                             note="the start itself, verified under the point's bounds")
+                             note=note)
         return Outcome(record, ver, dict(values), None)
 
     def worst_cases(self, problem, values) -> tuple:
@@ -373,6 +381,10 @@ class _Polishing:
         self.outcomes.append(outcome)
         self.result.starts.append(outcome.record)
         self.result.iterations += outcome.record.iterations
+        if _verified_end(outcome):
+            # IPOPT stopped short (out of iterations, a restoration failure) at a design the
+            # exact check accepts: a design the solve has seen, so a candidate as it is
+            self.consider(_as_found(outcome))
         if outcome.record.feasible:
             if not any(_same_optimum(self.problem, outcome, o) for o in self.optima):
                 self.optima.append(outcome)
@@ -437,6 +449,24 @@ class _Polishing:
             self.polish(beside[0].values)
             if self.best.verification.key >= before - SAME_KEY_REL * max(1e-3, abs(before)):
                 return
+
+
+def _verified_end(outcome: Outcome) -> bool:
+    """Whether a polish that did not converge ended at a design of its own (not its start)
+    that the exact check found feasible."""
+    r = outcome.record
+    return (not r.feasible and r.ipopt_status not in SUCCESS + (JOINED, STALLED, EXHAUSTED,
+                                                                AS_IT_IS)
+            and bool(outcome.verification.feasible) and outcome.values != r.start)
+
+
+def _as_found(outcome: Outcome) -> Outcome:
+    """The end of an unconverged polish as a known design (:data:`AS_IT_IS`)."""
+    record = StartRecord(start=dict(outcome.values), ipopt_status=AS_IT_IS, iterations=0,
+                         time_s=0.0, feasible=True, delta=outcome.verification.delta,
+                         note=f"where a polish stopped ({outcome.record.ipopt_status}), "
+                              f"verified as it is")
+    return Outcome(record, outcome.verification, dict(outcome.values), None)
 
 
 def _in_parallel(problem, count: int, starts: list[dict]) -> list[tuple[Outcome, Timings]]:
@@ -544,13 +574,8 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
         if work.best is None:           # no polish got there: polish from the user's design
             work.polish(given)
         work.consider(basins.as_it_is(given))
-    if not robust and not any(r.feasible and r.ipopt_status in SUCCESS
-                              for r in result.starts):
-        # no polish converged: the best screened designs, checked exactly, are the answer's
-        # floor (a design the solve has seen is never better than what it returns)
-        ranked = sorted((c for c in screening.candidates if c.feasible), key=lambda c: c.score)
-        for candidate in ranked[:CHECKED_WHEN_STUCK]:
-            work.consider(basins.as_it_is(candidate.values))
+    if not robust:
+        _screened_floor(work, screening, basins)
     result.screening |= {"polished": work.polished, "distinct_optima": len(work.optima)}
     if robust:
         solver.checks_in_parallel = workers > 1
@@ -567,6 +592,34 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
     if reach is not None:
         result.reachable = reach.to_dict()
     return result
+
+
+def _screened_floor(work: "_Polishing", screening, solver: PhaseSolver) -> None:
+    """The screened designs as the answer's floor: a design the solve has seen is never
+    better than what it returns. Where no polish converged, the best screened designs are
+    checked exactly; otherwise those whose sampled objective beats the best optimum (a
+    polish that ended in a poorer local optimum, or short of a dead point). A screened design
+    that wins is polished once more from where it lies; where the best is still a known design
+    and not a converged polish, it is refined on the exact check (:mod:`.refine`)."""
+    converged = any(r.feasible and r.ipopt_status in SUCCESS for r in work.result.starts)
+    feasible = [c for c in screening.candidates if c.feasible]
+    if not converged:
+        ranked = sorted(feasible, key=lambda c: c.score)
+    else:
+        best = work.best.verification.key
+        ranked = sorted((c for c in feasible if c.objective < best), key=lambda c: c.objective)
+    before = work.best
+    for candidate in ranked[:CHECKED_WHEN_STUCK]:
+        work.consider(solver.as_it_is(candidate.values))
+    if work.best is not before:
+        work.polish(work.best.values)
+    if work.best is not None and work.best.record.ipopt_status == AS_IT_IS:
+        # still a known design, not a converged polish: refined on the exact check alone
+        with solver.timings.stage("verification"):
+            better = refine(work.problem, work.best.values, work.best.verification.key)
+        if better is not None:
+            work.consider(solver.as_it_is(better, note="refined on the exact check from "
+                                                       "the best known design"))
 
 
 def _user_gave(problem) -> bool:

@@ -105,6 +105,11 @@ def relaxed(problem, name: str):
 MAX_RELAXED = 2
 #: polishes a relaxed solve may take at most (its screening's best basins and lines)
 RELAXED_STARTS = 4
+#: a bound beyond the first relaxed polish's value by more than this share of the bound (or
+#: of the value, whichever is larger) is far out of reach: that polish alone is the verdict's
+#: search. Nearer, the search goes on through :data:`RELAXED_STARTS` basins, where a second
+#: basin could still reach the bound
+FAR_BEYOND = 0.25
 
 
 def reach_of(problem, count: int, binding: str | None, solve_phase, workers: int = 1,
@@ -127,29 +132,46 @@ def reach_of(problem, count: int, binding: str | None, solve_phase, workers: int
             break
         tried += 1
         variant, read, figure, side, bound, unit = found
-        # a verdict's search: the relaxed problem's best basins, not every start
-        variant = replace(variant, solver=replace(variant.solver,
-                                                  starts=min(variant.solver.starts,
-                                                             RELAXED_STARTS)))
-        best = solve_phase(variant, count, workers=workers, explain=False)
-        designs = ([best.design] if best.status == "optimal" else []) + list(known)
+        # a verdict's search: the relaxed problem's best basin first, then (unless the bound
+        # lies far beyond it) its next basins, never every start
         reach = None
-        for design in designs:
-            ver = verify(problem, design)
-            if ver.measured is None or set(ver.violations) - {name}:
-                continue
-            value = float(read(ver.measured))
-            better = reach is None or (value > reach.value if side == "largest"
-                                       else value < reach.value)
-            if better:
-                reach = Reach(name, figure, float(bound), value, side, unit,
-                              _key_of(problem, name), dict(design))
+        for starts in (1, RELAXED_STARTS):
+            searched = replace(variant, solver=replace(
+                variant.solver, starts=min(variant.solver.starts, starts)))
+            best = solve_phase(searched, count, workers=workers, explain=False)
+            designs = ([best.design] if best.status == "optimal" else []) + list(known)
+            reach = _nearest(problem, name, designs, read, reach,
+                             (figure, float(bound), side, unit))
+            if reach is None or not reach.out_of_reach or _far(reach) or \
+                    variant.solver.starts <= starts:
+                break
         if reach is None:
             continue
         if reach.out_of_reach:
             return reach
         within = within or reach
     return within
+
+
+def _nearest(problem, name: str, designs, read, reach: Reach | None, what) -> Reach | None:
+    """The nearest to the bound of ``reach`` and ``designs`` that meet every constraint but
+    ``name``, each verified exactly under ``problem``."""
+    figure, bound, side, unit = what
+    for design in designs:
+        ver = verify(problem, design)
+        if ver.measured is None or set(ver.violations) - {name}:
+            continue
+        value = float(read(ver.measured))
+        if reach is None or (value > reach.value if side == "largest" else value < reach.value):
+            reach = Reach(name, figure, bound, value, side, unit, _key_of(problem, name),
+                          dict(design))
+    return reach
+
+
+def _far(reach: Reach) -> bool:
+    """Whether ``reach``'s bound lies :data:`FAR_BEYOND` its value."""
+    return abs(reach.bound - reach.value) > FAR_BEYOND * max(abs(reach.bound),
+                                                             abs(reach.value))
 
 
 def _key_of(problem, name: str) -> str:

@@ -47,6 +47,9 @@ class Candidate:
     score: float                 # rank: feasible by sampled objective, then by violation
     feasible: bool
     unit: np.ndarray             # position in the unit box of the free lengths
+    #: the sampled objective's ranking key (inf where a filter fails): comparable, within the
+    #: grid's error, with an exact verification's key
+    objective: float = math.inf
 
 
 @dataclass
@@ -94,7 +97,8 @@ def screen(problem, count: int, n_designs: int, extra: list[dict] = (),
     key[~np.isfinite(violation)] = np.inf     # does not assemble: never a seed
     for i in range(len(X)):
         out.candidates.append(Candidate(base | dict(zip(free, X[i])), float(key[i]),
-                                        bool(feasible[i]), unit[i]))
+                                        bool(feasible[i]), unit[i],
+                                        float(score[i]) if feasible[i] else math.inf))
     out.seeds, out.radius = _basins(out.candidates, len(free))
     return out
 
@@ -410,5 +414,6 @@ def line_seeds(problem, count: int, values: dict) -> list[Candidate]:
             if ok[i] and s[i] <= left and s[i] <= right and \
                     abs(X[i, j] - centre[j]) > 2 * step:
                 out.append(Candidate(base | dict(zip(free, X[i])), float(s[i]), True,
-                                     (X[i] - lower) / np.where(span > 0, span, 1.0)))
+                                     (X[i] - lower) / np.where(span > 0, span, 1.0),
+                                     float(s[i])))
     return sorted(out, key=lambda c: c.score)

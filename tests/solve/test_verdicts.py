@@ -140,3 +140,33 @@ def test_a_bound_no_design_reaches_is_infeasible_at_every_count_never_failed():
         phase = solve_phase(problem, count)
         assert phase.status == "infeasible", phase.message
         assert 0.6 < phase.reachable["value"] < 0.8
+
+
+def test_the_widest_swing_lies_on_the_face_beside_the_dead_point():
+    """A slotted lever whose swing grows without bound as its pivot distance XD nears the
+    crank L: IPOPT, started there, cannot hold its rows and stops in a poorer design; the
+    screened designs beat it and the refinement on the exact check carries the answer to the
+    box's face (XD = its lower bound), which no sample of the box beats."""
+    data = _shipped("vergov_solve")
+    data["design"]["XD"] = {"lower": 74.074, "upper": 1537.0, "initial": 292}
+    data["design"]["sections"] = 5
+    data["objective"] = {"minimize": "-swing"}
+    problem = problem_from_dict(data, where="swing.yaml")
+    result = solve(problem)
+    _checked(problem, result)
+    assert result.design["XD"] == pytest.approx(74.074, rel=1e-6)
+
+
+@pytest.mark.filterwarnings("ignore:peak.yaml")     # r1 under 1 mm: meant so
+def test_the_largest_peak_speed_is_not_left_where_a_polish_ran_out_of_iterations():
+    """A pulse reducer pushed towards its dead centre (r1 to the pivot distance a): the polish
+    runs out of iterations; where it stopped, verified exactly, is a candidate, and the
+    refinement takes it to the box's face."""
+    data = _shipped("pulse_reducer_solve")
+    data["design"]["r1"] = {"lower": 0.0321, "upper": 49.95, "initial": 40}   # six decades
+    data["design"]["freewheels"] = 4
+    data["objective"] = {"minimize": "-peak_speed"}
+    problem = problem_from_dict(data, where="peak.yaml")
+    result = solve(problem)
+    _checked(problem, result)
+    assert result.design["r1"] == pytest.approx(49.95, rel=1e-6)

@@ -102,6 +102,9 @@ class Outcome:
     verification: Verification
     values: dict
     surrogate: float | None
+    #: the polish ended where the output comes to rest once a turn (the NLP's edge, which
+    #: the exact envelope crosses: :meth:`PhaseNLP.output_at_rest`)
+    at_rest: bool = False
 
 
 class PhaseSolver:
@@ -169,6 +172,7 @@ class PhaseSolver:
         # The NLP holds the worst transmission angle at exact points: no margin to start with;
         # a dip the exact check still finds tightens the bound by the deficit.
         iterations, status, surrogate, multiplier, note = 0, "not run", None, None, ""
+        at_rest = False
         active: list = []
         tightening, hessian = 0.0, problem.solver.hessian
         refinements = regulation_steps = robust_steps = 0
@@ -181,6 +185,7 @@ class PhaseSolver:
                               SECONDARY_BUDGET - iterations if secondary else None)
             status, surrogate, multiplier, active = (run.status, run.surrogate,
                                                      run.multiplier, run.active)
+            at_rest = run.at_rest
             iterations += run.iterations
             trial = values | run.lengths
             new = self.verify(problem, trial, held)
@@ -260,7 +265,7 @@ class PhaseSolver:
                              delta=ver.delta, note=note, ratio_multiplier=multiplier,
                              active=_in_objective_units(problem, active, ver)
                              if status in SUCCESS else [])
-        return Outcome(record, ver, values, surrogate)
+        return Outcome(record, ver, values, surrogate, at_rest)
 
     def at(self, min_ratio=None, max_ripple=None, bound=None):
         """The problem with a Pareto point's bounds (see :meth:`solve_from`)."""
@@ -326,6 +331,7 @@ class PhaseSolver:
                     binding_parts=nlp.binding_scenarios(sol["lam_g"], ver.held),
                     at_window=nlp.at_window_bound(x, lbx, ubx),
                     picks_moved=nlp.picks_moved(x, params, ver.sequences),
+                    at_rest=nlp.output_at_rest(x, sol["lam_x"]),
                     binding="" if joined else nlp.binding(np.array(sol["g"]).ravel(), lbg, ubg),
                     active=nlp.active_set(problem, x, sol["lam_x"], sol["lam_g"], lbx, ubx))
 
@@ -344,6 +350,7 @@ class _Run:
     active: list            # what binds at the solution, with d objective / d bound
     binding_parts: tuple = ()   # a robust solve's held parts that bind (their offsets)
     picks_moved: bool = False   # an attained form's worst candidate moved (NLP.picks_moved)
+    at_rest: bool = False       # the output comes to rest once a turn (NLP.output_at_rest)
 
 
 class _Polishing:
@@ -600,7 +607,9 @@ def _screened_floor(work: "_Polishing", screening, solver: PhaseSolver) -> None:
     checked exactly; otherwise those whose sampled objective beats the best optimum (a
     polish that ended in a poorer local optimum, or short of a dead point). A screened design
     that wins is polished once more from where it lies; where the best is still a known design
-    and not a converged polish, it is refined on the exact check (:mod:`.refine`)."""
+    and not a converged polish, or a polish that ended where the output comes to rest once a
+    turn (an edge of the NLP, not of the problem), it is refined on the exact check
+    (:mod:`.refine`)."""
     converged = any(r.feasible and r.ipopt_status in SUCCESS for r in work.result.starts)
     feasible = [c for c in screening.candidates if c.feasible]
     if not converged:
@@ -613,8 +622,10 @@ def _screened_floor(work: "_Polishing", screening, solver: PhaseSolver) -> None:
         work.consider(solver.as_it_is(candidate.values))
     if work.best is not before:
         work.polish(work.best.values)
-    if work.best is not None and work.best.record.ipopt_status == AS_IT_IS:
-        # still a known design, not a converged polish: refined on the exact check alone
+    if work.best is not None and (work.best.record.ipopt_status == AS_IT_IS or
+                                  work.best.at_rest):
+        # still a known design, not a converged polish, or a polish stopped where the output
+        # comes to rest (the NLP's edge): refined on the exact check alone
         with solver.timings.stage("verification"):
             better = refine(work.problem, work.best.values, work.best.verification.key)
         if better is not None:

@@ -834,6 +834,20 @@ class PhaseNLP:
                     return True
         return False
 
+    def output_at_rest(self, x, lam_x, tol: float = 1e-9) -> bool:
+        """True when an eccentricity block's trough ``w_lo`` ended on its bound 0 and holds
+        the solution there (a multiplier): the output comes to rest once a turn. The NLP's
+        hand-overs cannot cross below zero where the exact envelope, clipped at rest, goes on
+        (δ = 2 for the midrange ripple), so the optimum there may be the NLP's edge and not
+        the problem's."""
+        lam_x = np.asarray(lam_x, dtype=float).ravel()
+        for block in self.layout.x:
+            if block.name.startswith("w_"):
+                lo = block.slice.start + 1
+                if x[lo] <= tol and abs(lam_x[lo]) > tol:
+                    return True
+        return False
+
     def lengths_of(self, x: np.ndarray) -> dict[str, float]:
         """The free lengths in mm, clipped to their bounds (IPOPT may relax a bound by ~1e-8)."""
         sl = self.layout.find(self.layout.x, "lengths")

@@ -7,8 +7,9 @@ there can leave the NLP's rows so far from consistent that IPOPT wanders off to 
 or runs out of iterations; an objective pushed towards such a point (the largest swing, the
 largest peak speed) has its optimum on the box's face beside it. The solve still knows designs
 there: the screening's, and where an unconverged polish stopped. :func:`refine` improves the
-best of them by Powell's conjugate-direction method (:func:`scipy.optimize.minimize`, bounded)
-on the exact check alone, in the screening's unit box (a range of decades in its logarithm),
+best of them by the Nelder-Mead simplex (:func:`scipy.optimize.minimize`, bounded; its
+first simplex small, a step of :data:`STEP` on each length, so that it searches beside the
+start and expands towards a face that improves) on the exact check alone, in the screening's unit box (a range of decades in its logarithm),
 within :data:`EVALUATIONS` exact checks. It certifies nothing beyond what the check does: the
 design it returns meets every constraint, and is never worse than the one it started from.
 """
@@ -24,13 +25,15 @@ from optdesign.solver.verify import verify
 
 #: exact checks one refinement may spend
 EVALUATIONS = 80
-#: a design the check rejects scores this (Powell's line searches need a finite value)
+#: the first simplex's edge, in the unit box (a fiftieth of each range)
+STEP = 0.02
+#: a design the check rejects scores this (the simplex needs a finite value)
 REJECTED = 1e300
 
 
 def refine(problem, values: dict, key: float) -> dict | None:
-    """Free lengths better than ``values`` (whose exact key is ``key``) by Powell's method on
-    the exact check within the box, or None when none is found."""
+    """Free lengths better than ``values`` (whose exact key is ``key``) by the Nelder-Mead simplex
+    on the exact check within the box, or None when none is found."""
     free = problem.free_lengths()
     if not free or not math.isfinite(key):
         return None
@@ -52,8 +55,13 @@ def refine(problem, values: dict, key: float) -> dict | None:
             best.update(key=ver.key, values=trial)
         return float(ver.key)
 
-    u0 = unit_of(np.array([[values[k] for k in free]], dtype=float), lower, upper)[0]
-    minimize(score, np.clip(u0, 0.0, 1.0), method="Powell",
-             bounds=[(0.0, 1.0)] * len(free),
-             options={"maxfev": EVALUATIONS, "xtol": 1e-7, "ftol": 1e-10})
+    u0 = np.clip(unit_of(np.array([[values[k] for k in free]], dtype=float),
+                         lower, upper)[0], 0.0, 1.0)
+    # a small simplex around the start: a step towards the box's far side on each length
+    simplex = np.vstack([u0] + [u0 + np.where(np.arange(len(free)) == j,
+                                              STEP if u0[j] + STEP <= 1.0 else -STEP, 0.0)
+                                for j in range(len(free))])
+    minimize(score, u0, method="Nelder-Mead", bounds=[(0.0, 1.0)] * len(free),
+             options={"maxfev": EVALUATIONS, "initial_simplex": simplex,
+                      "xatol": 1e-9, "fatol": 1e-12})
     return best["values"]

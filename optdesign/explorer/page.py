@@ -111,14 +111,17 @@ class Page:
 
     # ----------------------------------------------------------------- plots
     def _build_plots(self) -> None:
-        from bokeh.models import ColumnDataSource, Span
+        from bokeh.core.properties import field
+        from bokeh.models import ColumnDataSource, Legend, LegendItem, Range1d, Span
         from bokeh.plotting import figure
 
         self.links = ColumnDataSource(dict(x0=[], y0=[], x1=[], y1=[], colour=[], width=[]),
                                       name="explore-links")
         self.joints = ColumnDataSource(dict(x=[], y=[], name=[]), name="explore-joints")
         self.paths = ColumnDataSource(dict(xs=[], ys=[]), name="explore-paths")
-        fig = figure(width=560, height=480, match_aspect=True, title="the linkage to scale [mm]",
+        # a square frame and equal spans: the drawing is to scale
+        fig = figure(frame_width=430, frame_height=430, x_range=Range1d(-1, 1),
+                     y_range=Range1d(-1, 1), title="the linkage to scale [mm]",
                      tools="pan,wheel_zoom,reset", name="explore-linkage")
         fig.multi_line("xs", "ys", source=self.paths, color="#bbbbbb", line_width=1)
         fig.segment("x0", "y0", "x1", "y1", source=self.links, color="colour",
@@ -130,15 +133,16 @@ class Page:
         self.members = ColumnDataSource(dict(xs=[], ys=[], colour=[]), name="explore-members")
         self.outputs = ColumnDataSource(dict(xs=[], ys=[], colour=[], label=[]),
                                         name="explore-outputs")
-        sp = figure(width=560, height=300, title="driving speed of each rocker, and the "
+        sp = figure(width=560, height=340, title="driving speed of each rocker, and the "
                     "output speed at each listed e", tools="pan,wheel_zoom,reset,hover",
                     tooltips=[("", "@label")], x_range=(0, 360), name="explore-speeds")
         sp.multi_line("xs", "ys", source=self.members, color="colour", line_width=1,
                       alpha=0.7)
-        sp.multi_line("xs", "ys", source=self.outputs, color="colour", line_width=2.5,
-                      legend_field="label")
-        sp.legend.location, sp.legend.label_text_font_size = "bottom_left", "8pt"
-        sp.legend.background_fill_alpha = 0.7
+        outputs = sp.multi_line("xs", "ys", source=self.outputs, color="colour",
+                                line_width=2.5)
+        sp.add_layout(Legend(items=[LegendItem(label=field("label"), renderers=[outputs])],
+                             label_text_font_size="8pt", border_line_alpha=0.0),
+                      "below")                  # under the plot: no curve hidden
         self.cursor = Span(location=0, dimension="height", line_color="#444444",
                            line_dash="dashed")
         sp.add_layout(self.cursor)
@@ -160,7 +164,7 @@ class Page:
             name="explore-front")
         fig = figure(width=560, height=300, tools="tap,pan,wheel_zoom,reset,hover",
                      tooltips=[("", "@label"), ("δ", "@y{0.0000}"), ("", "@x{0.0000}")],
-                     title=f"the front of {self.front.path}: click a point to load its design",
+                     title="the front: click a point to load its design",
                      name="explore-front-plot")
         fig.scatter("x", "y", source=self.front_source, size=9, color="colour")
         fig.xaxis.axis_label, fig.yaxis.axis_label = self.front.axis, "δ"

@@ -273,7 +273,14 @@ class Page:
                                f"{html.escape(text)}</div>") if text else ""
 
     def refresh(self, keep_message: bool = False) -> None:
-        """Evaluate the design on screen and redraw every figure of it."""
+        """Evaluate the design on screen and redraw every figure of it (the page's changes
+        sent to the browser at once, in one message)."""
+        from panel.io import hold
+
+        with hold():
+            self._redraw(keep_message)
+
+    def _redraw(self, keep_message: bool) -> None:
         shot = self.session.evaluate()
         self.shot = shot
         self.headline.object = _headline(shot)
@@ -286,18 +293,18 @@ class Page:
                 source.data = {k: [] for k in source.data}
             return
         t = shot.turn
-        deg = t.phi_deg.tolist() + [360.0]
+        deg = np.append(t.phi_deg, 360.0)
         self.members.data = dict(
-            xs=[deg] * len(t.speeds), ys=[list(v) + [v[0]] for v in t.speeds],
+            xs=[deg] * len(t.speeds), ys=[np.append(v, v[0]) for v in t.speeds],
             colour=[MEMBER_COLOURS[k % len(MEMBER_COLOURS)] for k in range(len(t.speeds))])
         shown = t.outputs or (("output", t.output),)
         self.outputs.data = dict(
-            xs=[deg] * len(shown), ys=[list(v) + [v[0]] for _, v in shown],
+            xs=[deg] * len(shown), ys=[np.append(v, v[0]) for _, v in shown],
             colour=[OUTPUT_COLOURS[i % len(OUTPUT_COLOURS)] for i in range(len(shown))],
             label=[label for label, _ in shown])
         joints = t.positions.reshape(-1, 2)
-        self.paths.data = dict(xs=[list(t.positions[:, j, 0]) for j in range(len(t.names))],
-                               ys=[list(t.positions[:, j, 1]) for j in range(len(t.names))])
+        self.paths.data = dict(xs=[t.positions[:, j, 0] for j in range(len(t.names))],
+                               ys=[t.positions[:, j, 1] for j in range(len(t.names))])
         lo, hi = np.nanmin(joints, axis=0), np.nanmax(joints, axis=0)
         half = 0.55 * max(hi - lo) or 1.0
         centre = (lo + hi) / 2
@@ -316,11 +323,11 @@ class Page:
         index = {n: i for i, n in enumerate(t.names)}
         a = [at[index[link[0]]] for link in t.links]
         b = [at[index[link[1]]] for link in t.links]
-        self.links.data = dict(x0=[p[0] for p in a], y0=[p[1] for p in a],
-                               x1=[p[0] for p in b], y1=[p[1] for p in b],
+        a, b = np.array(a), np.array(b)
+        self.links.data = dict(x0=a[:, 0], y0=a[:, 1], x1=b[:, 0], y1=b[:, 1],
                                colour=[ROLE_COLOURS[link[2]] for link in t.links],
                                width=[ROLE_WIDTHS[link[2]] for link in t.links])
-        self.joints.data = dict(x=at[:, 0].tolist(), y=at[:, 1].tolist(), name=list(t.names))
+        self.joints.data = dict(x=at[:, 0], y=at[:, 1], name=list(t.names))
         self.cursor.location = float(t.phi_deg[frame])
 
 

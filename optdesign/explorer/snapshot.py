@@ -98,10 +98,11 @@ def snapshot(problem, values: dict, eccentricity: float = 1.0,
     if not result.assembles:
         return Snapshot(dict(values), eccentricity, result, None, result.failure["message"])
     design = Design.from_problem(problem, values)
-    try:
-        design.check_assembly(eccentricity)
-    except AssemblyError as exc:
-        return Snapshot(dict(values), eccentricity, result, None, str(exc))
+    if eccentricity not in {1.0, *problem.eccentricities}:     # not evaluated already
+        try:
+            design.check_assembly(eccentricity)
+        except AssemblyError as exc:
+            return Snapshot(dict(values), eccentricity, result, None, str(exc))
     named = result.ripples()
     labels = tuple((r.at, r.text(4)) for r in named.each if r.at is not None) \
         if named is not None else ()

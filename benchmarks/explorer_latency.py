@@ -10,13 +10,17 @@ slider to move and nothing to solve) and on ``problems/free_design.yaml`` (count
 * round trip: ``optdesign explore P --no-browser`` in a process of its own, headless Chromium
   driven by Playwright; a length slider's handle moved one step by the keyboard, and the time
   until the page shows the new δ (the browser's event, the server's exact evaluation and
-  redraw, the page's update), ``--moves`` times back and forth; the exact evaluation alone
-  (in process) beside it;
+  redraw, the page's update), ``--moves`` times, each a new design (no evaluation is
+  repeated); the exact evaluation alone (in process, the same moves) beside it;
 * re-solve: the file's optimum (a cold ``solve``), then every bound that binds there moved by
   1 % the tight way and one polish warm-started from the optimum on the NLP already built
   (:class:`optdesign.explorer.session.Session`), against a cold ``solve`` of the file with that
   bound (in process, ``solve_time_s``); each the median of ``--rounds``; "same δ" when both
   end at the same δ to 1e-7.
+
+The machine's load average when the run ended is written beside the round trips: on a shared
+machine the round trip is mostly waiting for a core. ``--table-only`` writes the tables
+again from the JSON twin.
 
 Targets (the issue's): a round trip under 100 ms, a warm re-solve under a fifth of the cold
 solve. Writes benchmarks/results/explorer_latency.md and .json.
@@ -84,7 +88,7 @@ def round_trips(problem: Path, moves: int) -> dict:
             for i in range(moves + 2):
                 before = page.evaluate(DEEP_DELTA)
                 t0 = time.perf_counter()
-                page.keyboard.press("ArrowRight" if i % 2 == 0 else "ArrowLeft")
+                page.keyboard.press("ArrowRight")      # a new design every move
                 page.wait_for_function(f"(before) => ({DEEP_DELTA})() !== before", arg=before,
                                        polling="raf", timeout=30_000)
                 if i >= 2:                      # the first two warm the page up
@@ -96,7 +100,7 @@ def round_trips(problem: Path, moves: int) -> dict:
     session = Session.open(problem)
     alone = []
     for i in range(moves):
-        session.set(SLIDER, session.values[SLIDER] + (0.2 if i % 2 == 0 else -0.2))
+        session.set(SLIDER, session.values[SLIDER] + 0.2)
         t0 = time.perf_counter()
         session.evaluate()
         alone.append(1e3 * (time.perf_counter() - t0))
@@ -150,14 +154,15 @@ def resolves(problem: Path, rounds: int) -> list[dict]:
     return out
 
 
-def tables(trips: dict, solves: list[dict]) -> list[str]:
+def tables(trips: dict, solves: list[dict], load: float) -> list[str]:
     lines = ["Each slider move: the exact evaluation through the server and the page "
              "(headless Chromium).", "",
              "| problem | slider → δ on the page, median [ms] | 90th percentile [ms] | "
-             "exact evaluation alone [ms] |", "|---|---|---|---|"]
+             "exact evaluation alone [ms] | machine load (1-min average, 2 cores) |",
+             "|---|---|---|---|---|"]
     for name, t in trips.items():
         lines.append(f"| {name} | {t['median_ms']:.0f} | {t['p90_ms']:.0f} | "
-                     f"{t['evaluation_ms']:.0f} |")
+                     f"{t['evaluation_ms']:.0f} | {load:.1f} |")
     lines += ["", "A bound moved by 1 %: one polish warm-started from the optimum on the NLP "
               "already built, against a cold solve of the file so moved.", "",
               "| problem | bound moved 1 % | warm re-solve [s] | IPOPT iterations | "
@@ -175,7 +180,15 @@ def main(argv=None) -> int:
     ap.add_argument("--moves", type=int, default=30, help="slider moves per problem")
     ap.add_argument("--rounds", type=int, default=3, help="solves per median")
     ap.add_argument("--out", type=Path, default=RESULTS / "explorer_latency.md")
+    ap.add_argument("--table-only", action="store_true",
+                    help="write the tables again from the results' JSON twin, measure nothing")
     args = ap.parse_args(argv)
+    if args.table_only:
+        doc = json.loads(args.out.with_suffix(".json").read_text())
+        lines = tables(doc["round_trips"], doc["resolves"], doc["meta"]["load_average"][0])
+        args.out.write_text("\n".join(lines) + "\n")
+        print("\n".join(lines))
+        return 0
     trips, solves = {}, []
     for name in PROBLEMS:
         path = ROOT / "problems" / name
@@ -187,7 +200,7 @@ def main(argv=None) -> int:
             "machine": platform.machine() + " " + platform.system(),
             "cores": os.cpu_count(), "moves": args.moves, "rounds": args.rounds,
             "load_average": os.getloadavg()}
-    lines = tables(trips, solves)
+    lines = tables(trips, solves, meta["load_average"][0])
     args.out.write_text("\n".join(lines) + "\n")
     args.out.with_suffix(".json").write_text(json.dumps(
         {"meta": meta, "round_trips": trips, "resolves": solves}, indent=2) + "\n")

@@ -220,8 +220,9 @@ def explore(problem, design=None, front=None):
     every constraint's margin; re-optimise (IPOPT warm-started from the design shown),
     follow, save.
 
-    ``problem``: a path, a mapping with the file's keys, or a Problem loaded from a file (its
-    bounds are moved in the file's mapping and loaded again by the loader's rules).
+    ``problem``: a path or a mapping with the file's keys (its bounds are moved in that
+    mapping and loaded again by the loader's rules; a Problem only when its file is found
+    by its name from the working folder).
     ``design``: None (the file's own), a mapping of design keys (a :class:`SolveResult`'s
     ``.design``), or a result.json / design.yaml path. ``front``: the folder of a finished
     ``pareto`` run, its points drawn and loadable. Returns the Panel layout; displayed as a

@@ -52,7 +52,7 @@ class Session:
     @classmethod
     def open(cls, problem, design=None, point: int | None = None) -> "Session":
         """A session on ``problem`` (a path, a mapping with the file's keys, or a Problem
-        loaded from a file), starting from ``design``: None (the file's own), a mapping of
+        whose file is found by its name from here), starting from ``design``: None (the file's own), a mapping of
         design keys, or a path to a result.json, a design.yaml or a front's pareto.csv (with
         ``point``). Every value is checked by the loader's rules; a fault raises a
         :class:`~optdesign.errors.ProblemError` or :class:`~optdesign.errors.UsageError`
@@ -64,7 +64,8 @@ class Session:
             path = Path(problem.source)
             if not path.is_file():
                 raise ProblemError(f"{problem.source}: the explorer moves bounds in the "
-                                   f"problem's file: give the file's path or its mapping")
+                                   f"problem file's keys: give the file's path or its "
+                                   f"mapping (a Problem keeps only its file's name)")
             problem = path
         if isinstance(problem, Mapping):
             data = dict(problem)

@@ -239,4 +239,4 @@ def explore(problem, design=None, front=None):
     session = Session.open(problem, design)
     shown_front = front_points(front, session.problem) if front is not None else None
     pn.extension(inline=True)
-    return Page(session, shown_front).layout
+    return Page(session, shown_front, wide=False).layout

@@ -36,14 +36,16 @@ CONTROLS_WIDTH = 340
 class Page:
     """The layout of one :class:`~optdesign.explorer.session.Session`; ``front``: the rows
     of a finished front (:func:`optdesign.explorer.front.front_points`) and its file.
-    ``.layout`` is the Panel object a server serves and a notebook displays."""
+    ``.layout`` is the Panel object a server serves and a notebook displays; ``wide``
+    False puts the plots one under another (a notebook's cell is narrower than a page)."""
 
-    def __init__(self, session, front=None):
+    def __init__(self, session, front=None, wide: bool = True):
         import panel as pn
 
         self.pn = pn
         self.session = session
         self.front = front
+        self.wide = wide
         self._syncing = False
         self.shot = None
         self._build_widgets()
@@ -58,7 +60,8 @@ class Page:
         for name, lower, upper in s.lengths():
             w = pn.widgets.EditableFloatSlider(
                 name=f"{name} [mm]", start=lower, end=upper, fixed_start=lower,
-                fixed_end=upper, value=float(s.values[name]), step=_step(upper - lower),
+                fixed_end=upper, value=round(float(s.values[name]), 4),
+                step=_step(upper - lower),
                 width=CONTROLS_WIDTH - 20, css_classes=[f"explore-length-{name}"])
             w.param.watch(lambda event, name=name: self._on_length(name, event.new), "value")
             self.lengths[name] = w
@@ -182,11 +185,14 @@ class Page:
                     self.eccentricity, pn.pane.HTML("<b>bounds</b>"), *self.bounds.values(),
                     self.reoptimise, self.follow, self.save_as, self.save]
         left = pn.Column(*controls, width=CONTROLS_WIDTH)
-        right = [self.headline, self.message,
-                 pn.Row(pn.Column(pn.pane.Bokeh(self.linkage_figure), self.angle),
-                        pn.Column(pn.pane.Bokeh(self.speeds_figure), self.binding)),
-                 pn.Row(self.table, *([pn.pane.Bokeh(self.front_figure)]
-                                      if self.front_figure is not None else []))]
+        front = [pn.pane.Bokeh(self.front_figure)] if self.front_figure is not None else []
+        drawing = pn.Column(pn.pane.Bokeh(self.linkage_figure), self.angle)
+        speeds = pn.Column(pn.pane.Bokeh(self.speeds_figure), self.binding)
+        if self.wide:
+            right = [self.headline, self.message, pn.Row(drawing, speeds),
+                     pn.Row(self.table, *front)]
+        else:
+            right = [self.headline, self.message, drawing, speeds, self.table, *front]
         return pn.Row(left, pn.Column(*right), css_classes=["explore-page"])
 
     # ----------------------------------------------------------------- actions

@@ -22,7 +22,7 @@ The machine's load average when the run ended is written beside the round trips:
 machine the round trip is mostly waiting for a core. ``--table-only`` writes the tables
 again from the JSON twin.
 
-Targets (the issue's): a round trip under 100 ms, a warm re-solve under a fifth of the cold
+Targets: a round trip under 100 ms, a warm re-solve under a fifth of the cold
 solve. Writes benchmarks/results/explorer_latency.md and .json.
 """
 from __future__ import annotations

@@ -207,6 +207,10 @@ class Page:
             self._say(str(exc), error=True)
             self._sync()                # the controls back to the session's state
             return False
+        except Exception as exc:        # a bug: one line in the page, and the page goes on
+            self._say(_internal(exc), error=True)
+            self._sync()
+            return False
         self.refresh()
         return True
 
@@ -226,6 +230,9 @@ class Page:
             done = self.session.reoptimise()
         except OptDesignError as exc:
             self._say(str(exc), error=True)
+            return
+        except Exception as exc:        # a bug: one line in the page, and the page goes on
+            self._say(_internal(exc), error=True)
             return
         self._sync()
         self.refresh(keep_message=True)
@@ -335,6 +342,12 @@ class Page:
                                width=[ROLE_WIDTHS[link[2]] for link in t.links])
         self.joints.data = dict(x=at[:, 0], y=at[:, 1], name=list(t.names))
         self.cursor.location = float(t.phi_deg[frame])
+
+
+def _internal(exc: Exception) -> str:
+    """The page's line for a fault that is a bug, as the command line words it."""
+    return (f"internal error ({type(exc).__name__}: {str(exc)[:200]}); please report it with "
+            f"the problem file")
 
 
 def _step(span: float) -> float:

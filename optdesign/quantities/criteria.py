@@ -270,6 +270,8 @@ class LengthConstraint(Constraint):
         """Its bounds as ``problem`` sets them (the mechanism's constraint of this name
         in ``problem``), or its own where ``problem`` has none: an NLP built once reads a
         moved bound from the problem of each solve, as it reads the others."""
+        if problem is None:
+            return self.lower, self.upper
         same = next((c for c in problem.model.criteria(problem.constraints, problem.options)
                      if isinstance(c, LengthConstraint) and c.name == self.name), self)
         return same.lower, same.upper

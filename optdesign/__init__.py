@@ -9,8 +9,8 @@ Heavy modules (CasADi, pandas, matplotlib, dask) are imported only when a functi
 from importlib import import_module
 
 __version__ = "0.1.0"
-__all__ = ["Options", "__version__", "analyze", "load_options", "load_problem", "pareto",
-           "plot_front", "plot_mechanism", "plot_speeds", "sensitivities", "solve"]
+__all__ = ["Options", "__version__", "analyze", "explore", "load_options", "load_problem",
+           "pareto", "plot_front", "plot_mechanism", "plot_speeds", "sensitivities", "solve"]
 
 
 def __getattr__(name: str):

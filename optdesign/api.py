@@ -7,6 +7,7 @@
     result                               # in Jupyter: a table of the optimum per phase count
     front = pareto(problem, points=8)    # ParetoResult: .front, .knee, .to_frame()
     analyze(problem, result.design)      # AnalysisResult: the exact figures of one design
+    explore(problem, result.design)      # in Jupyter: sliders, the linkage, δ, re-optimise
 
 Every function takes a problem as a :class:`~optdesign.problem.loader.Problem`, a path to a problem
 file, or a mapping with the file's keys (validated by the same loader: a bad key raises
@@ -24,8 +25,8 @@ from optdesign.limits import COUNTS
 from optdesign.problem.loader import (Options, Problem, Reader, load_problem as _load_file,
                                       problem_from_dict)
 
-__all__ = ["Options", "analyze", "as_problem", "load_options", "load_problem", "pareto",
-           "plot_front", "plot_mechanism", "plot_speeds", "sensitivities", "solve"]
+__all__ = ["Options", "analyze", "as_problem", "explore", "load_options", "load_problem",
+           "pareto", "plot_front", "plot_mechanism", "plot_speeds", "sensitivities", "solve"]
 
 
 def load_problem(source) -> Problem:
@@ -210,3 +211,32 @@ def plot_front(front, ax=None, title: str | None = None):
     points = front.points.copy()
     points.attrs["knee"] = front.indicators.get("knee")
     return plot_fronts(points, ax=_ax(ax), title=title, axis=front.axis)
+
+
+def explore(problem, design=None, front=None):
+    """The live explorer of ``optdesign explore`` as a notebook widget (docs/explorer.md): a
+    slider with a number field for every free length, the count, the drawn eccentricity and
+    every constraint's bound; the linkage and its speeds; δ named as ``solve`` names it and
+    every constraint's margin; re-optimise (IPOPT warm-started from the design shown),
+    follow, save.
+
+    ``problem``: a path or a mapping with the file's keys (its bounds are moved in that
+    mapping and loaded again by the loader's rules; a Problem only when its file is found
+    by its name from the working folder).
+    ``design``: None (the file's own), a mapping of design keys (a :class:`SolveResult`'s
+    ``.design``), or a result.json / design.yaml path. ``front``: the folder of a finished
+    ``pareto`` run, its points drawn and loadable. Returns the Panel layout; displayed as a
+    cell's last value it shows itself (Panel and Bokeh load their scripts into the notebook,
+    nothing from the internet)."""
+    import panel as pn
+
+    from optdesign.explorer.front import front_points
+    from optdesign.explorer.page import Page
+    from optdesign.explorer.session import Session
+
+    if front is not None and not isinstance(front, (str, Path)):
+        raise TypeError(f"front must be a path (got {type(front).__name__})")
+    session = Session.open(problem, design)
+    shown_front = front_points(front, session.problem) if front is not None else None
+    pn.extension(inline=True)
+    return Page(session, shown_front, wide=False).layout

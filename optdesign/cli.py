@@ -35,6 +35,7 @@ COMMANDS = [
     "optdesign.commands.animate",
     "optdesign.commands.compare",
     "optdesign.commands.atlas",
+    "optdesign.explorer.command",
     "optdesign.commands.schema",
     "optdesign.commands.server",
 ]

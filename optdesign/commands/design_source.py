@@ -147,7 +147,7 @@ def design_from_file(name: str, problem, point: int | None = None,
                                         problem, where), problem, where, what), source)
 
 
-def _text(path: Path, where: str) -> str:
+def file_text(path: Path, where: str) -> str:
     """The file's text, a regular file of at most 1 MiB (never /dev/zero or a FIFO)."""
     from optdesign.problem.yaml_text import read_text
 
@@ -159,7 +159,7 @@ def _text(path: Path, where: str) -> str:
 
 def read_json(path: Path, where: str):
     """The JSON document of a regular file of at most 1 MiB (UsageError naming ``where``)."""
-    text = _text(path, where)
+    text = file_text(path, where)
     try:
         return json.loads(text)
     except (ValueError, RecursionError):
@@ -212,7 +212,7 @@ def _from_front(path: Path, problem, where: str, point: int | None) -> tuple[dic
         rows = data.get("points") if isinstance(data, dict) else None
         rows = rows if isinstance(rows, list) else []
     else:
-        rows = list(csv.DictReader(io.StringIO(_text(path, where))))
+        rows = list(csv.DictReader(io.StringIO(file_text(path, where))))
     if not 1 <= point <= len(rows):
         raise UsageError(f"--point must lie in [1, {len(rows)}], the points of {shown(str(path))} "
                          f"(got {point})")
@@ -329,9 +329,6 @@ def design_yaml(source_path, result) -> str | None:
     """The text of design.yaml: the problem file at ``source_path`` with the design of
     ``result`` (a SolveResult) fixed, named ``NAME_design``, runnable as it is; None without
     a design or a readable source."""
-    import yaml
-
-    from optdesign.problem.loader import MAX_NAME_CHARS
     from optdesign.problem.yaml_text import parse, read_text
 
     if not result.design or source_path is None:
@@ -342,16 +339,27 @@ def design_yaml(source_path, result) -> str | None:
         return None
     if not isinstance(data, dict):
         return None
-    data = dict(data)
-    data["name"] = f"{result.name[:MAX_NAME_CHARS - len(DESIGN_SUFFIX)]}{DESIGN_SUFFIX}"
-    data["design"] = {k: (int(v) if float(v).is_integer() and k not in _lengths(result)
-                          else float(v)) for k, v in result.design.items()}
     header = (f"# {result.name}, its optimum fixed: the problem file {Path(source_path).name} "
               f"with the design of result.json\n"
               f"# (δ = {result.delta:.6g}, ratio = {result.ratio:.6g}). Runnable as it is, "
               f"e.g. optdesign analyze design.yaml;\n"
               f"# or give it to any command that evaluates a design: --design design.yaml.\n")
-    return header + yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
+    return header + design_text(data, result)
+
+
+def design_text(data: dict, result) -> str:
+    """The problem file's mapping ``data`` with the design of ``result`` (``.name``,
+    ``.mechanism``, ``.design``) fixed and named ``NAME_design``, as YAML: what
+    ``--design`` and every command read."""
+    import yaml
+
+    from optdesign.problem.loader import MAX_NAME_CHARS
+
+    data = dict(data)
+    data["name"] = f"{result.name[:MAX_NAME_CHARS - len(DESIGN_SUFFIX)]}{DESIGN_SUFFIX}"
+    data["design"] = {k: (int(v) if float(v).is_integer() and k not in _lengths(result)
+                          else float(v)) for k, v in result.design.items()}
+    return yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
 
 
 def _lengths(result) -> set[str]:

@@ -267,7 +267,14 @@ class LengthConstraint(Constraint):
         return self.formula(q.lengths)
 
     def bounds(self, problem, tightening_deg=0.0):
-        return self.lower, self.upper
+        """Its bounds as ``problem`` sets them (the mechanism's constraint of this name
+        in ``problem``), or its own where ``problem`` has none: an NLP built once reads a
+        moved bound from the problem of each solve, as it reads the others."""
+        if problem is None:
+            return self.lower, self.upper
+        same = next((c for c in problem.model.criteria(problem.constraints, problem.options)
+                     if isinstance(c, LengthConstraint) and c.name == self.name), self)
+        return same.lower, same.upper
 
     def tolerance(self, m):
         return TOL_LENGTH_REL * max(abs(v) for v in m.lengths.values())

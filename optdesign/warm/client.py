@@ -29,8 +29,9 @@ from optdesign.warm import place, wire
 HANDSHAKE_TIMEOUT_S = 3.0
 #: signals passed on to the command's process group
 FORWARDED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT)
-#: commands never handed over: the server's own
-_LOCAL = {"server"}
+#: commands never handed over: the server's own, and the explorer (a server of its own that
+#: runs until Ctrl-C: its event loop and threads belong in a process of their own)
+_LOCAL = {"server", "explore"}
 #: signals the interpreter ignores at its start, whatever its caller set
 _PYTHON_IGNORES = {getattr(signal, name) for name in ("SIGPIPE", "SIGXFSZ")
                    if hasattr(signal, name)}

@@ -1,4 +1,6 @@
 """notebooks/design_space.ipynb runs top to bottom on the small front (no network needed)."""
+import json
+
 from tests.conftest import executed_notebook
 
 
@@ -19,3 +21,6 @@ def test_design_space_notebook_executes(small_front, small_path, monkeypatch):
     imports = {line.split()[1] for line in source.splitlines()
                if line.startswith(("from optdesign", "import optdesign"))}
     assert imports == {"optdesign"}     # the public API only
+    # the last cell: the picked design in the live explorer, a Panel widget with its δ
+    widgets = [o for o in outputs if "application/vnd.holoviews_exec.v0+json" in o.get("data", {})]
+    assert widgets and "explore-delta" in json.dumps(outputs)

@@ -103,10 +103,12 @@ def folder(env=os.environ) -> Path | None:
 
 @dataclass(frozen=True)
 class Recipe:
-    """What one library is built from: the NLP's function (x, p) -> (f, g), the Hessian
-    IPOPT asks for, and the digest of both with everything else the code depends on."""
+    """What one library is built from: the NLP's function (x, p) -> (f, g) and its
+    serialised text, the Hessian IPOPT asks for, and the digest of both with everything else
+    the code depends on."""
 
     function: ca.Function
+    serialized: str
     hessian: str
     digest: str
 
@@ -126,8 +128,9 @@ def recipe(x, p, f, g, hessian: str) -> Recipe:
     digest = hashlib.sha256()
     for part in (str(FORMAT), ca.__version__, platform.machine(), " ".join(FLAGS), hessian):
         digest.update(part.encode() + b"\0")
-    digest.update(function.serialize().encode())
-    return Recipe(function, hessian, digest.hexdigest())
+    serialized = function.serialize()
+    digest.update(serialized.encode())
+    return Recipe(function, serialized, hessian, digest.hexdigest())
 
 
 def library(rec: Recipe, where: Path) -> Path | None:
@@ -244,8 +247,7 @@ def start(rec: Recipe, where: Path, detached: bool = True,
         return None
     lock, source = where / f"{rec.name}.lock", None
     try:
-        source = _write(where / f"{rec.name}.casadi", rec.function.serialize().encode(),
-                        keep=True)
+        source = _write(where / f"{rec.name}.casadi", rec.serialized.encode(), keep=True)
         package = str(Path(__file__).resolve().parents[2])
         env = dict(os.environ, PYTHONPATH=os.pathsep.join(
             [package] + [x for x in os.environ.get("PYTHONPATH", "").split(os.pathsep) if x]))

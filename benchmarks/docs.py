@@ -1,7 +1,7 @@
 """One figure, one source: the generated tables of README.md and docs/*.md.
 
-The README keeps none at present (its measured tables are on docs/benchmarks.md and the
-topical pages); it is still read, so that a block placed there is checked like any other.
+The README keeps two (the verdicts' oracle and the solve against its floor); the other
+measured tables are on docs/benchmarks.md and the topical pages.
 
 A generated block in a Markdown page is wrapped in two comments:
 

@@ -38,6 +38,7 @@ COMMANDS = [
     "optdesign.explorer.command",
     "optdesign.commands.schema",
     "optdesign.commands.server",
+    "optdesign.commands.warmup",
 ]
 
 
@@ -135,6 +136,25 @@ def _warn(message) -> None:
 
 
 def _run(args, argv) -> int:
+    """The command of ``args``, its outcome mapped to an exit code; under --debug with the
+    library's debug lines on stderr."""
+    if not getattr(args, "debug", False):
+        return _run_command(args, argv)
+    import logging
+
+    logger, handler = logging.getLogger("optdesign"), _stderr_handler()
+    handler.setFormatter(logging.Formatter("optdesign: debug: %(message)s"))
+    level = logger.level
+    logger.addHandler(handler)
+    logger.setLevel(logging.DEBUG)
+    try:
+        return _run_command(args, argv)
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(level)
+
+
+def _run_command(args, argv) -> int:
     """The command of ``args``, its outcome mapped to an exit code."""
     if argv is None:        # run as the `optdesign` program: it writes figures to files only
         os.environ.setdefault("MPLBACKEND", "Agg")
@@ -166,6 +186,23 @@ def _run(args, argv) -> int:
                            f"{where}", 1)
     except Exception as exc:            # a bug: say so, and how to report it
         return _fail(args, _internal(args, type(exc).__name__, str(exc)), 1)
+
+
+def _stderr_handler():
+    """A logging handler writing to the stderr of the moment (a test or the warm server's
+    child may have replaced the stream since the handler was made)."""
+    import logging
+
+    class Stderr(logging.StreamHandler):
+        @property
+        def stream(self):
+            return sys.stderr
+
+        @stream.setter
+        def stream(self, value):
+            pass
+
+    return Stderr()
 
 
 def _internal(args, kind: str, detail: str) -> str:

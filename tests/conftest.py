@@ -1,7 +1,9 @@
 """Shared fixtures: the paper's design, a writer of problem files, headless Chromium."""
+import atexit
 import os
 import shutil
 import subprocess
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -11,6 +13,11 @@ ROOT = Path(__file__).resolve().parents[1]
 # every command of the suite runs in a process of its own, and none leaves a warm server
 # behind; tests/warm turn the server on for themselves
 os.environ["OPTDESIGN_SERVER"] = "off"
+# no compiled library of the user's cache is loaded, and no solve starts a compiler beside
+# the suite (optdesign.solver.compiled): tests/solve/test_compiled.py builds its own
+os.environ["XDG_CACHE_HOME"] = tempfile.mkdtemp(prefix="optdesign-test-cache-")
+atexit.register(shutil.rmtree, os.environ["XDG_CACHE_HOME"], True)
+os.environ["OPTDESIGN_COMPILE"] = "load"
 PAPER = dict(l0=225.0, l1=20.0, l2=225.0, l2_prime=100.0, l3=56.0, phases=6)
 
 

@@ -50,6 +50,7 @@ from optdesign.quantities import get_quantity
 from optdesign.quantities.criteria import (constraints_of, interval_quantities, objective_of,
                                            spec_forms, spec_sides,
                                            quantity_specs)
+from optdesign.solver import compiled
 
 IPOPT_OPTIONS = {
     "ipopt.print_level": 0,
@@ -648,7 +649,8 @@ class PhaseNLP:
         return block
 
     def solver(self, hessian: str) -> ca.Function:
-        """IPOPT on this NLP with the exact Hessian or L-BFGS; each built at its first use.
+        """IPOPT on this NLP with the exact Hessian or L-BFGS; each built at its first use, on
+        the NLP's compiled derivatives where they are cached (:mod:`optdesign.solver.compiled`).
 
         Every iteration passes through :attr:`watch`, which stops a run that has entered the
         neighbourhood of an optimum found already (its basin is known)."""
@@ -659,9 +661,8 @@ class PhaseNLP:
             opts = dict(IPOPT_OPTIONS) | {"ipopt.max_iter": self.problem.solver.max_iter,
                                           "ipopt.hessian_approximation": hessian,
                                           "iteration_callback": self.watch}
-            self._solvers[hessian] = ca.nlpsol(
-                f"nlp_n{self.count}", "ipopt",
-                {"x": self.x_sym, "p": self.p_sym, "f": self.f, "g": self.g}, opts)
+            self._solvers[hessian] = compiled.nlpsol(f"nlp_n{self.count}", self.x_sym,
+                                                     self.p_sym, self.f, self.g, opts)
         return self._solvers[hessian]
 
     # ------------------------------------------------------------------ per solve

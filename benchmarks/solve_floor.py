@@ -1,0 +1,250 @@
+"""The solve against its floor: what one IPOPT run from the winning start costs, and ours.
+
+Per problem of the race (``benchmarks/solve_vs_peers.py``'s ``CASES``):
+
+* **the floor**: one IPOPT run from the start whose polish won (the NLP built beforehand, its
+  derivatives compiled, :mod:`optdesign.solver.compiled`), plus one exact check of the answer
+  (``verify``, the evaluator's cache emptied): what a solver that knew the winning start and
+  still verified its answer would spend; the median of ``--repeats``;
+* **our first solve**: ``solve(problem)`` in a fresh process (imports done, the clock around
+  the call alone) with the NLP's compiled library in the cache;
+* **our warm solve**: the next ``--repeats`` calls in that process (medians), each stage of
+  it (``timings_s``: the NLP's build, the screening, the IPOPT runs, the exact verification;
+  the rest is the pool, the sensitivities, the accuracy record, the bookkeeping) and the IPOPT
+  iterations of the winning run against all of the solve's;
+* **before and after**: the same in processes on CasADi's virtual machine
+  (``OPTDESIGN_COMPILE=off``), a virtual-machine process and a compiled one alternating for
+  each problem in each of ``--rounds`` rounds, so both meet the same machine; "same answer"
+  compares δ, the design and the status bit for bit.
+
+Before measuring, the race's NLPs are compiled into the user's cache (``optdesign warm-up``'s
+recipes, then one solve that starts a build of any NLP the warm-up did not foresee, waited
+for); ``--no-warm-up`` skips that.
+
+    python benchmarks/solve_floor.py [--problems disc_n6 ...] [--rounds 3] [--repeats 3]
+
+Writes benchmarks/results/solve_floor.md (three tables: the floor, where the warm solve
+goes, compiled against the virtual machine) and solve_floor.json.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from optdesign.outputs.atomic import atomic_write_text  # noqa: E402
+from solve_vs_peers import CASES, load_case, one_check_seconds, timed_solve  # noqa: E402
+
+RESULTS = ROOT / "benchmarks" / "results"
+STAGES = ("build", "screening", "ipopt", "verification")
+MODES = {"vm": "off", "compiled": "load"}
+
+
+# --------------------------------------------------------------------------- in the child
+def winning_start(problem, result):
+    """(count, start values, its StartRecord) of the polish that gave ``result``'s answer."""
+    count = int(result.design[problem.model.count_variable])
+    phase = next(p for p in result.per_phase if p.count == count)
+    records = [s for s in phase.starts if s.feasible and s.delta is not None]
+    win = min(records, key=lambda s: abs(s.delta - result.delta))
+    return count, dict(win.start) | {problem.model.count_variable: count}, win
+
+
+def floor(problem, result, repeats: int) -> dict:
+    """One IPOPT run from the winning start on the NLP built beforehand, and one exact check
+    of where it ends: seconds of each (medians of ``repeats``), its iterations."""
+    from optdesign.solver.driver import AS_IT_IS, PhaseSolver
+
+    count, start, win = winning_start(problem, result)
+    solver = PhaseSolver(problem, count)
+    hessian = problem.solver.hessian
+    ver = solver.verify(problem, start, search=False)
+    design, runs = dict(start), []
+    if win.ipopt_status != AS_IT_IS:
+        solver.nlp(ver.sequences).solver(hessian)          # built beforehand
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            run = solver._ipopt(problem, ver, 0.0, hessian)
+            runs.append((time.perf_counter() - t0, run.iterations))
+        design = start | run.lengths
+    check = one_check_seconds(problem, design, repeats)
+    ipopt = statistics.median(t for t, _ in runs) if runs else 0.0
+    return {"ipopt_s": ipopt, "check_s": check, "floor_s": ipopt + check,
+            "iterations": runs[0][1] if runs else 0, "winning_run_iterations": win.iterations,
+            "winning_status": win.ipopt_status}
+
+
+def child(case: str, repeats: int) -> dict:
+    """One process's measures of ``case``: the first solve, ``repeats`` warm ones, the floor;
+    and how many of the NLPs it built ran on a compiled library."""
+    from optdesign.solver import compiled
+
+    loaded, real = [], compiled.library
+
+    def library(rec, where):
+        path = real(rec, where)
+        loaded.append(path is not None)
+        return path
+
+    compiled.library = library
+    problem = load_case(case)
+    result, first = timed_solve(problem)
+    warm = [timed_solve(problem)[1] for _ in range(repeats)]
+    return {"first": first, "warm": warm, "floor": floor(problem, result, repeats),
+            "mode": compiled.mode(), "compiled_nlps": sum(loaded), "nlps": len(loaded)}
+
+
+def run_child(case: str, mode: str, repeats: int) -> dict:
+    env = dict(os.environ, OPTDESIGN_COMPILE=MODES[mode], OPTDESIGN_SERVER="off")
+    out = subprocess.run([sys.executable, __file__, "--_child", case, "--repeats", str(repeats)],
+                         capture_output=True, text=True, env=env, cwd=ROOT)
+    line = next((x for x in out.stdout.splitlines() if x.startswith("@@FLOOR@@")), None)
+    if line is None:
+        raise RuntimeError(f"{case} ({mode}) failed:\n{out.stderr[-3000:]}")
+    return json.loads(line[len("@@FLOOR@@"):])
+
+
+# --------------------------------------------------------------------------- warm-up
+def warm_up(cases, log) -> None:
+    """Compile every NLP the race's solves build into the user's cache, and wait for it."""
+    from optdesign.commands.warmup import recipes_of
+    from optdesign.limits import local_processes
+    from optdesign.solver import compiled
+
+    where = compiled.folder()
+    if where is None or compiled.compiler() is None:
+        log("no cache folder or no C compiler: measured on the virtual machine")
+        return
+    for case in cases:
+        recipes = [r for _, r in recipes_of(load_case(case))]
+        for rec, path, seconds, note in compiled.warm_up(recipes, where, local_processes(0)):
+            log(f"{case}: {path} ({note}, {seconds:.1f} s)")
+    env = dict(os.environ, OPTDESIGN_COMPILE="on", OPTDESIGN_SERVER="off")
+    code = "import sys; from solve_vs_peers import load_case; from optdesign.solver import " \
+           "solve; [solve(load_case(c)) for c in sys.argv[1:]]"
+    subprocess.run([sys.executable, "-c", code, *cases], env=env, check=True,
+                   cwd=ROOT / "benchmarks")
+    while any(compiled.building(where, p.stem) for p in where.glob("nlp-*.lock")):
+        time.sleep(1.0)
+
+
+# --------------------------------------------------------------------------- output
+def summary(runs: list[dict]) -> dict:
+    """Medians over the rounds of one (case, mode)."""
+    warm = [w for r in runs for w in r["warm"]]
+    return {"first_s": statistics.median(r["first"]["time_s"] for r in runs),
+            "warm_s": statistics.median(w["time_s"] for w in warm),
+            "stages_s": {k: statistics.median(w["timings"][k] for w in warm) for k in STAGES},
+            "floor_s": statistics.median(r["floor"]["floor_s"] for r in runs),
+            "floor_ipopt_s": statistics.median(r["floor"]["ipopt_s"] for r in runs),
+            "floor_check_s": statistics.median(r["floor"]["check_s"] for r in runs),
+            "iterations": runs[0]["warm"][0]["iterations"],
+            "winning_iterations": runs[0]["floor"]["winning_run_iterations"],
+            "compiled_nlps": min(r["compiled_nlps"] for r in runs),
+            "nlps": max(r["nlps"] for r in runs)}
+
+
+def same_answer(a: list[dict], b: list[dict]) -> bool:
+    """Every solve of both lists with the same status, δ and design, bit for bit."""
+    answers = {json.dumps([s["status"], s["delta"], s["design"]], sort_keys=True)
+               for r in a + b for s in [r["first"], *r["warm"]]}
+    return len(answers) == 1
+
+
+def tables(results: dict) -> str:
+    lines = ["| problem | floor [ms] | warm solve [s] | warm / floor | first solve [s] | "
+             "first / floor |", "|---|---|---|---|---|---|"]
+    for case, r in results.items():
+        c = r["compiled"]
+        lines.append(f"| {case} | {1e3 * c['floor_s']:.0f} | {c['warm_s']:.3f} | "
+                     f"{c['warm_s'] / c['floor_s']:.0f}× | {c['first_s']:.3f} | "
+                     f"{c['first_s'] / c['floor_s']:.0f}× |")
+    lines += ["", "| problem | floor: IPOPT + check [ms] | build | screening | IPOPT | "
+              "verification | rest | IPOPT iterations: winning run / solve |",
+              "|---|---|---|---|---|---|---|---|"]
+    for case, r in results.items():
+        c = r["compiled"]
+        stages = [1e3 * c["stages_s"][k] for k in STAGES]
+        rest = 1e3 * c["warm_s"] - sum(stages)
+        lines.append(f"| {case} | {1e3 * c['floor_ipopt_s']:.0f} + "
+                     f"{1e3 * c['floor_check_s']:.0f} | "
+                     + " | ".join(f"{s:.0f}" for s in stages) + f" | {rest:.0f} | "
+                     f"{c['winning_iterations']} / {c['iterations']} |")
+    lines += ["", "| problem | warm, virtual machine [s] | warm, compiled [s] | VM / compiled "
+              "| first, virtual machine [s] | first, compiled [s] | floor, VM [ms] | NLPs on a "
+              "library (main process) | same answer |", "|---|---|---|---|---|---|---|---|---|"]
+    for case, r in results.items():
+        v, c = r["vm"], r["compiled"]
+        lines.append(f"| {case} | {v['warm_s']:.3f} | {c['warm_s']:.3f} | "
+                     f"{v['warm_s'] / c['warm_s']:.2f} | {v['first_s']:.3f} | "
+                     f"{c['first_s']:.3f} | {1e3 * v['floor_s']:.0f} | "
+                     f"{c['compiled_nlps']} of {c['nlps']} | "
+                     f"{'yes' if r['same_answer'] else 'no'} |")
+    return "\n".join(lines)
+
+
+def header(args: dict) -> str:
+    return (f"Our solve against its floor (one IPOPT run from the winning start, the NLP "
+            f"built and compiled, plus one exact check), in-process, medians of "
+            f"{args['rounds']} fresh processes per mode × {args['repeats']} warm solves; the "
+            f"virtual machine's and the compiled processes alternating.\n\n")
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--problems", nargs="+", choices=list(CASES), default=list(CASES))
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--repeats", type=int, default=3,
+                        help="warm solves (and floor runs) per process")
+    parser.add_argument("--no-warm-up", action="store_true",
+                        help="measure with the cache as it is")
+    parser.add_argument("--render", action="store_true",
+                        help="only rewrite the .md from the .json of the last run")
+    parser.add_argument("--_child", help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.render:
+        saved = json.loads((RESULTS / "solve_floor.json").read_text())
+        atomic_write_text(RESULTS / "solve_floor.md", header(saved["meta"]["args"])
+                          + tables(saved["results"]) + "\n")
+        return 0
+    if args._child:
+        print("@@FLOOR@@" + json.dumps(child(args._child, args.repeats), default=float))
+        return 0
+    log = lambda s: print(s, file=sys.stderr, flush=True)  # noqa: E731
+    if not args.no_warm_up:
+        warm_up(args.problems, log)
+    runs = {(c, m): [] for c in args.problems for m in MODES}
+    for k in range(args.rounds):
+        for case in args.problems:
+            for mode in MODES:                 # the virtual machine, then compiled
+                runs[(case, mode)].append(run_child(case, mode, args.repeats))
+                log(f"round {k + 1}: {case} {mode}: warm "
+                    f"{runs[(case, mode)][-1]['warm'][0]['time_s']:.3f} s")
+    results = {c: {m: summary(runs[(c, m)]) for m in MODES} |
+               {"same_answer": same_answer(runs[(c, "vm")], runs[(c, "compiled")])}
+               for c in args.problems}
+    md = header(vars(args)) + tables(results) + "\n"
+    print(md)
+    meta = {"args": {k: v for k, v in vars(args).items() if k != "_child"},
+            "time": time.strftime("%Y-%m-%d %H:%M:%S"), "python": platform.python_version(),
+            "machine": f"{platform.machine()} {platform.system()}", "cores": os.cpu_count()}
+    atomic_write_text(RESULTS / "solve_floor.md", md)
+    atomic_write_text(RESULTS / "solve_floor.json", json.dumps(
+        {"meta": meta, "results": results,
+         "runs": {f"{c} {m}": v for (c, m), v in runs.items()}}, indent=1, default=float))
+    log(f"wrote {RESULTS / 'solve_floor.md'} and .json")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,73 @@
+"""``optdesign warm-up PROBLEM.yaml``: compile the problem's NLPs ahead of its first solve.
+
+A solve that finds no compiled library of its NLP runs on CasADi's virtual machine and starts
+the build beside it (:mod:`optdesign.solver.compiled`); this command builds every admissible
+phase count's NLP now, as many at once as there are cores, and prints where each library is.
+Exit 0 when every library is in place; 1 when none could be built (no C compiler on PATH, no
+cache folder of the user's own, a compiler that failed: solves then run on the virtual
+machine, as before); 2 for bad input (one line naming the file and key).
+"""
+from __future__ import annotations
+
+import sys
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("warm-up", help="compile the problem's NLP derivatives into the cache "
+                                       "ahead of its first solve")
+    p.add_argument("problem", help="problem file (YAML)")
+    p.set_defaults(run=run)
+
+
+def run(args) -> int:
+    from optdesign.limits import local_processes
+    from optdesign.problem.loader import load_problem
+    from optdesign.solver import compiled
+
+    problem = load_problem(args.problem)
+    where = compiled.folder()
+    if where is None:
+        print("optdesign warm-up: no cache folder of this user's own "
+              "(XDG_CACHE_HOME or ~/.cache): solves run on CasADi's virtual machine",
+              file=sys.stderr)
+        return 1
+    if compiled.compiler() is None:
+        print(f"optdesign warm-up: no C compiler ({compiled.COMPILER}) on PATH: solves run "
+              f"on CasADi's virtual machine", file=sys.stderr)
+        return 1
+    labels, recipes = zip(*recipes_of(problem))
+    ok = True
+    for label, (_, path, seconds, note) in zip(labels, compiled.warm_up(
+            recipes, where, local_processes(problem.solver.workers))):
+        if path is None:
+            ok = False
+            print(f"{label}: not compiled ({note}): runs on CasADi's virtual machine")
+        else:
+            print(f"{label}: {path}" + (f" (compiled in {seconds:.1f} s)"
+                                        if note == "compiled" else f" ({note})"))
+    return 0 if ok else 1
+
+
+def recipes_of(problem) -> list[tuple]:
+    """(label, :class:`~optdesign.solver.compiled.Recipe`) of every NLP a solve of
+    ``problem`` builds first: one per admissible count (and a robust solve's nominal one),
+    with as many hand-over slots as the driver gives it for the file's own design."""
+    from dataclasses import replace
+
+    from optdesign.solver import compiled, verify
+    from optdesign.solver.driver import PhaseSolver
+    from optdesign.solver.nlp import is_robust
+
+    problems = [problem]
+    if is_robust(problem):          # a robust solve polishes the nominal problem first
+        problems.append(replace(problem, objective=replace(problem.objective, robust="none")))
+    out = []
+    for count in problem.counts():
+        given = problem.start_values() | {problem.model.count_variable: count}
+        for which in problems:
+            nlp = PhaseSolver(which, count).nlp(verify(which, given, search=False).sequences)
+            out.append((f"{problem.model.count_variable} = {count}"
+                        + (" (nominal)" if which is not problem else ""),
+                        compiled.recipe(nlp.x_sym, nlp.p_sym, nlp.f, nlp.g,
+                                        which.solver.hessian)))
+    return out

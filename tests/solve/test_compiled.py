@@ -1,0 +1,218 @@
+"""The NLP's compiled derivatives (optdesign.solver.compiled): the same answer to the last bit,
+a library loaded only when it is the user's own, intact and built for this NLP, a build
+beside the solve (one per NLP), and the virtual machine wherever there is no compiler.
+
+One library is built for the module (Vergov's variator at 3 sections, the smallest NLP of the
+shipped problems: about ten seconds of gcc), by the path a solve takes: started beside it as a
+detached process and waited for here.
+"""
+import logging
+import os
+import shutil
+import time
+
+import casadi as ca
+import pytest
+
+from optdesign.commands.warmup import recipes_of
+from optdesign.problem.loader import problem_from_dict
+from optdesign.solver import compiled, solve
+from tests.conftest import ROOT, file_data, run_main
+
+pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="no gcc on PATH")
+
+VERGOV = ROOT / "problems" / "vergov_solve.yaml"
+START = compiled.start
+
+
+def vergov_data() -> dict:
+    data = file_data(VERGOV, design__sections=3)
+    data["solver"]["workers"] = 1          # one process: its log lines reach caplog
+    return data
+
+
+def recipe_of(problem) -> compiled.Recipe:
+    [(_, rec)] = recipes_of(problem)
+    return rec
+
+
+def wait_for_build(where, name, timeout=300.0) -> None:
+    end = time.monotonic() + timeout
+    while compiled.building(where, name):
+        assert time.monotonic() < end, "the build did not end"
+        time.sleep(0.2)
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    """(the cache folder, the problem, its recipe, its library), the library built by a
+    solve's own path: started beside it, detached."""
+    cache = tmp_path_factory.mktemp("cache")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("XDG_CACHE_HOME", str(cache))
+        mp.setenv(compiled.VARIABLE, "on")
+        problem = problem_from_dict(vergov_data())
+        rec = recipe_of(problem)
+        where = compiled.folder()
+        assert compiled.library(rec, where) is None
+        solve(problem)                  # no library: the VM, and a build beside
+        assert compiled.building(where, rec.name)
+        assert compiled.start(rec, where) is None          # one build per NLP
+        wait_for_build(where, rec.name)
+        path = compiled.library(rec, where)
+        assert path is not None, list(where.iterdir())
+        yield where, problem, rec, path
+
+
+@pytest.fixture
+def cache(built, monkeypatch):
+    """The module's cache folder as the user's, compiled libraries loaded and no build
+    started by a solve."""
+    where, problem, rec, path = built
+    monkeypatch.setenv("XDG_CACHE_HOME", str(where.parent))
+    monkeypatch.setenv(compiled.VARIABLE, "load")
+    return built
+
+
+def test_the_cache_folder_is_the_users_own_and_closed(built):
+    where = built[0]
+    assert where.name == "optdesign"
+    assert oct(where.stat().st_mode & 0o777) == oct(0o700)
+    assert oct(built[3].stat().st_mode & 0o077) == oct(0)
+    assert sorted(p.name for p in where.iterdir()) == [built[3].name]   # no lock, no source
+
+
+def test_a_solve_with_and_without_the_library_is_the_same_to_the_last_bit(cache, monkeypatch,
+                                                                         caplog):
+    where, problem, rec, path = cache
+    monkeypatch.setenv(compiled.VARIABLE, "off")
+    vm = solve(problem)
+    monkeypatch.setenv(compiled.VARIABLE, "load")
+    with caplog.at_level(logging.DEBUG, logger="optdesign.compiled"):
+        lib = solve(problem)
+    assert str(path) in caplog.text                    # the library was the one used
+    assert vm.status == lib.status == "optimal"
+    assert lib.delta == vm.delta and lib.ratio == vm.ratio          # bit for bit
+    assert lib.design == vm.design
+    assert lib.iterations == vm.iterations
+    assert [p.delta for p in lib.per_phase] == [p.delta for p in vm.per_phase]
+
+
+def _falls_back(rec, problem, monkeypatch) -> list:
+    """The builds a solve of ``problem`` starts (recorded, not run), asserting it ran on the
+    virtual machine."""
+    started = []
+    monkeypatch.setenv(compiled.VARIABLE, "on")
+    monkeypatch.setattr(compiled, "start", lambda r, w, **kw: started.append(r.digest))
+    loaded = []
+    real = ca.nlpsol
+    monkeypatch.setattr(compiled.ca, "nlpsol",
+                        lambda name, kind, what, opts: loaded.append(what) or
+                        real(name, kind, what, opts))
+    assert solve(problem).status == "optimal"
+    assert loaded and all(isinstance(w, dict) for w in loaded)    # the symbolic NLP: the VM
+    return started
+
+
+def test_a_corrupt_library_is_ignored_and_rebuilt(cache, tmp_path, monkeypatch):
+    """In a cache of its own: a library this process has loaded stays mapped under its path
+    (a file replaced under it changes nothing the process sees)."""
+    where, problem, rec, path = cache
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    mine = compiled.folder() / path.name
+    flipped = bytearray(path.read_bytes())
+    flipped[len(flipped) // 2] ^= 1                          # one bit changed
+    mine.write_bytes(bytes(flipped))
+    os.chmod(mine, 0o700)
+    assert compiled.library(rec, mine.parent) is None
+    mine.write_bytes(path.read_bytes()[:4096])               # a library cut short
+    assert compiled.library(rec, mine.parent) is None
+    assert _falls_back(rec, problem, monkeypatch) == [rec.digest]
+    monkeypatch.setattr(compiled, "start", START)
+    [(_, rebuilt, seconds, note)] = compiled.warm_up([rec], mine.parent)
+    assert note == "compiled" and rebuilt == mine and seconds > 0
+    assert compiled.library(rec, mine.parent) == mine
+    assert mine.read_bytes() == path.read_bytes()           # the same build, byte for byte
+
+
+@pytest.mark.parametrize("mode", [0o720, 0o702])
+def test_a_library_others_may_write_is_ignored(cache, monkeypatch, mode):
+    where, problem, rec, path = cache
+    try:
+        os.chmod(path, mode)
+        assert compiled.library(rec, where) is None
+        assert _falls_back(rec, problem, monkeypatch) == [rec.digest]
+    finally:
+        os.chmod(path, 0o700)
+    assert compiled.library(rec, where) == path
+
+
+def test_a_library_built_for_another_nlp_is_ignored(cache, monkeypatch):
+    """A stale library: in the place of one NLP's, built for another."""
+    where, problem, rec, path = cache
+    data = vergov_data()
+    data["design"]["XD"] = {"lower": 120, "upper": 500, "initial": 292}     # another scale
+    other = problem_from_dict(data)
+    stale = recipe_of(other)
+    assert stale.digest != rec.digest
+    target = where / f"{stale.name}.so"
+    shutil.copy(path, target)
+    try:
+        assert compiled.library(stale, where) is None
+        assert _falls_back(stale, other, monkeypatch) == [stale.digest]
+    finally:
+        target.unlink()
+
+
+def test_without_a_compiler_the_solve_runs_on_the_virtual_machine(tmp_path, monkeypatch,
+                                                                  capsys):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    monkeypatch.setenv(compiled.VARIABLE, "on")
+    monkeypatch.setenv("PATH", str(tmp_path / "empty"))
+    assert compiled.compiler() is None
+    problem = problem_from_dict(vergov_data())
+    rec = recipe_of(problem)
+    where = compiled.folder()
+    assert compiled.start(rec, where) is None
+    r = solve(problem)
+    assert r.status == "optimal"
+    assert list(where.iterdir()) == []                  # nothing started, nothing left
+    code, out = run_main(["warm-up", VERGOV])
+    assert code == 1 and out == ""
+    assert "no C compiler (gcc) on PATH" in capsys.readouterr().err
+
+
+def test_a_failed_build_is_noted_and_not_started_again(tmp_path, monkeypatch, caplog):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    monkeypatch.setattr(compiled, "COMPILER", "false")          # a compiler that fails
+    problem = problem_from_dict(vergov_data())
+    rec = recipe_of(problem)
+    where = compiled.folder()
+    child = compiled.start(rec, where, detached=False)
+    child.communicate()
+    assert child.returncode == 1
+    assert compiled.library(rec, where) is None
+    assert (where / f"{rec.name}.failed").read_text().startswith("RuntimeError: ")
+    assert sorted(p.name for p in where.iterdir()) == [f"{rec.name}.failed"]
+    with caplog.at_level(logging.DEBUG, logger="optdesign.compiled"):
+        assert compiled.start(rec, where) is None
+    assert "an earlier build" in caplog.text
+
+
+def test_warm_up_prints_where_the_libraries_are(cache, capsys, write_problem):
+    where, problem, rec, path = cache
+    code, out = run_main(["warm-up", write_problem(vergov_data())])
+    assert code == 0
+    assert out.strip() == f"sections = 3: {path} (cached)"
+    code, _ = run_main(["warm-up", write_problem("name: x\nmechanism: nothing\n")])
+    assert code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "p.yaml" in err[0]
+
+
+def test_the_library_is_named_by_the_nlp_and_the_flags(cache, monkeypatch):
+    where, problem, rec, path = cache
+    assert recipe_of(problem).digest == rec.digest          # the same NLP, the same name
+    assert recipe_of(problem_from_dict(vergov_data() | {"name": "other"})).digest == rec.digest
+    monkeypatch.setattr(compiled, "FLAGS", ("-O2", "-shared", "-fPIC"))
+    assert recipe_of(problem).digest != rec.digest

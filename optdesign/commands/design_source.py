@@ -346,6 +346,10 @@ def design_yaml(source_path, result) -> str | None:
     data["name"] = f"{result.name[:MAX_NAME_CHARS - len(DESIGN_SUFFIX)]}{DESIGN_SUFFIX}"
     data["design"] = {k: (int(v) if float(v).is_integer() and k not in _lengths(result)
                           else float(v)) for k, v in result.design.items()}
+    objective = data.get("objective")
+    if isinstance(objective, dict) and objective.get("minimize") == "phases":
+        # the least count is fixed now: its least δ, the count's own objective, stays
+        data["objective"] = dict(objective) | {"minimize": "ripple"}
     header = (f"# {result.name}, its optimum fixed: the problem file {Path(source_path).name} "
               f"with the design of result.json\n"
               f"# (δ = {result.delta:.6g}, ratio = {result.ratio:.6g}). Runnable as it is, "

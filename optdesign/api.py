@@ -89,10 +89,12 @@ def sensitivities(problem, design: Mapping | None = None):
 
 def solve(problem, progress=None, *, options=None):
     """The best verified design over every admissible count
-    (:func:`optdesign.solver.driver.solve`). ``progress``: called once per count.
+    (:func:`optdesign.solver.driver.solve`), or with ``minimize: phases`` the least count
+    whose least δ meets the ripple cap (:func:`optdesign.solver.least_count.least_count`).
+    ``progress``: called once per count solved.
     ``options``: how to solve it, apart from the problem (:class:`Options`, or a mapping
     ``{"solver": {...}}`` whose keys replace the file's); by default the file's own."""
-    from optdesign.solver.driver import solve as _solve
+    from optdesign.solver.entry import solve as _solve
 
     if progress is not None and not callable(progress):
         raise TypeError(f"progress must be a callable or None (got {type(progress).__name__})")

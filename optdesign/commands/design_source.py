@@ -359,6 +359,10 @@ def design_text(data: dict, result) -> str:
     data["name"] = f"{result.name[:MAX_NAME_CHARS - len(DESIGN_SUFFIX)]}{DESIGN_SUFFIX}"
     data["design"] = {k: (int(v) if float(v).is_integer() and k not in _lengths(result)
                           else float(v)) for k, v in result.design.items()}
+    objective = data.get("objective")
+    if isinstance(objective, dict) and objective.get("minimize") == "phases":
+        # the least count is fixed now: its least δ, the count's own objective, stays
+        data["objective"] = dict(objective) | {"minimize": "ripple"}
     return yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
 
 

@@ -171,7 +171,9 @@ TOP_KEYS = names(TOP_DECLARATIONS)
 OBJECTIVE_KEYS: tuple[Key, ...] = (
     Key("minimize", "choice", "what the solve minimises: ripple (δ, the worst over the listed "
         "eccentricities), -ratio (the largest ratio with δ at most max_ripple), "
-        "-transmission_angle (the largest least transmission angle), or any quantity's worst "
+        "-transmission_angle (the largest least transmission angle), phases (the least "
+        "admissible count whose least δ is at most max_ripple, that count's least-δ design; "
+        "docs/solve.md), or any quantity's worst "
         "over the listed eccentricities, least (NAME: housing_radius, ratio, ...) or largest "
         "(-NAME: -swing, -ripple, ...)",
         default=Objective.minimize, choices=lambda: tuple(objectives())),
@@ -182,7 +184,7 @@ OBJECTIVE_KEYS: tuple[Key, ...] = (
         "eccentricity", unit="-", default=Objective.min_ratio, lower=0),
     Key("max_ripple", "number", "largest δ allowed", unit="-",
         default=Objective.max_ripple, default_text="none", lower=0, open_lower=True,
-        example=0.5, condition="required with minimize: -ratio"),
+        example=0.5, condition="required with minimize: -ratio or phases"),
     Key("robust", "choice", "none: the nominal design; worst_case: minimise the worst δ over "
         "the tolerances: box, every part of it assembling and meeting every constraint "
         "(with minimize: ripple, listed eccentricities and a tolerances: section; "
@@ -490,6 +492,7 @@ def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "pro
     objective = _read_objective(r, top.get("objective", {}))
     constraints, objective = _quantity_aliases(r, top, constraints, objective)
     _check_required(r, objective)
+    _check_least_count(r, objective, design, mech)
     solver = _read_solver(r, top.get("solver", {}))
     sections = {}
     for key, target in SECTION_PARSERS.items():
@@ -735,7 +738,8 @@ def _quantity_aliases(r, top, constraints: Constraints, objective: Objective):
             value = getattr(spec, side)
             if alias is None or not math.isfinite(value) or spec.at is not None:
                 continue
-            if spec.name == "ripple" and objective.minimize != "-ratio":
+            if spec.name == "ripple" and \
+                    "max_ripple" not in objectives()[objective.minimize].requires:
                 continue                # a cap on the least ripple: a bound of its own
             section, key = alias
             if key in given[section]:
@@ -764,8 +768,23 @@ def _check_required(r, objective: Objective) -> None:
     name or by a bound that stands for them (``constraints.ripple.upper``)."""
     for key in objectives()[objective.minimize].requires:
         if getattr(objective, key) is None:
+            also = " (or constraints.ripple.upper)" if key == "max_ripple" else ""
             raise r.error(f"objective.{key}", f"is required when minimize is "
-                                              f"{objective.minimize}")
+                                              f"{objective.minimize}{also}")
+
+
+def _check_least_count(r, objective: Objective, design, mech) -> None:
+    """``minimize: phases`` asks for the least of several admissible counts: a count fixed
+    (one number, or one choice) leaves nothing to choose."""
+    if objective.minimize != "phases":
+        return
+    count = design[mech.count_variable]
+    admissible = count.admissible()
+    if len(admissible) < 2:
+        raise r.error(f"design.{mech.count_variable}",
+                      f"is fixed at {admissible[0]}: minimize: phases picks the least of "
+                      f"several counts; give {mech.count_variable}: {{lower, upper}} or "
+                      f"{{choices: [...]}}")
 
 
 def _read_regulation(r, raw) -> tuple[tuple[float, ...], tuple[float, float] | None]:

@@ -13,6 +13,7 @@ from optdesign.declarations import Key, REQUIRED
 from optdesign.mechanisms import get_mechanism, known
 from optdesign.problem.keys import problem_keys
 from optdesign.problem.loader import MAX_INTEGER, MAX_TEXT_CHARS, NUMBER_MAGNITUDE
+from optdesign.quantities.bounds import ALIASES
 from optdesign.quantities.criteria import objectives
 
 DIALECT = "https://json-schema.org/draft/2020-12/schema"
@@ -50,15 +51,21 @@ def _mechanism_rule(name: str) -> dict:
 
 
 def _objective_rules(keys) -> list[dict]:
-    """``objective.max_ripple`` (and whatever else an objective ``requires``) when
+    """``objective.max_ripple`` (and whatever else an objective ``requires``), or the
+    ``constraints:`` bound that stands for it (``ripple: {upper}``), when
     ``objective.minimize`` names that objective."""
     out = []
     for name, objective in objectives().items():
-        if objective.requires:
+        for key in objective.requires:
+            ways = [{"properties": {"objective": {"required": [key]}},
+                     "required": ["objective"]}]
+            ways += [{"properties": {"constraints": {"properties": {quantity: {
+                "required": [side]}}, "required": [quantity]}}, "required": ["constraints"]}
+                for (quantity, side), target in ALIASES.items() if target == ("objective", key)]
             out.append({"if": {"properties": {"objective": {
                 "properties": {"minimize": {"const": name}}, "required": ["minimize"]}},
                 "required": ["objective"]},
-                "then": {"properties": {"objective": {"required": list(objective.requires)}}}})
+                "then": ways[0] if len(ways) == 1 else {"anyOf": ways}})
     return out
 
 

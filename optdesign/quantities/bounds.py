@@ -57,7 +57,7 @@ def declarations() -> tuple[Key, ...]:
                                    open_lower=True, upper=1)))
         alias = [f"{side}: {'.'.join(ALIASES[(name, side)])}" for side in sides
                  if (name, side) in ALIASES]
-        when = " under minimize: -ratio" if name == "ripple" else ""
+        when = " under minimize: -ratio or phases" if name == "ripple" else ""
         meaning = f"bound on the {q.meaning}" + (
             f" ({', '.join(alias)}{when} is the same bound)" if alias else "")
         out.append(Key(name, "mapping", meaning, unit=q.unit, default_text="none",

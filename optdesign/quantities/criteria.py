@@ -225,7 +225,7 @@ class RatioFloor(Constraint):
 
 
 class RippleCap(Constraint):
-    """worst δ <= max_ripple, with the largest-ratio objective."""
+    """worst δ <= max_ripple, with the largest-ratio objective and the least count."""
 
     name = "max_ripple"
 
@@ -509,6 +509,19 @@ class LargestRatio(Objective):
         return -ratio
 
 
+class LeastCount(LeastRipple):
+    """The least admissible count whose least δ meets the ripple cap (``minimize: phases``,
+    :mod:`optdesign.solver.least_count`). Each count is solved for its least δ, the secondary
+    objective (the atlas's question per cell), so within a count designs rank by δ and the
+    cap is one of the constraints they are checked against."""
+
+    name = "phases"
+    requires = ("max_ripple",)
+
+    def constraints(self, problem):
+        return [RippleCap()]
+
+
 class QuantityObjective(Objective):
     """The worst of a quantity over the listed eccentricities, least (``minimize: NAME``)
     or largest (``minimize: -NAME``); the worst δ breaks ties, as for the largest ratio. The
@@ -580,7 +593,8 @@ def _objectives_of(names: tuple[str, ...]) -> dict[str, type[Objective]]:
 
 #: the objectives ``objective.minimize`` may name besides the quantities' own
 OBJECTIVES: dict[str, type[Objective]] = {"ripple": LeastRipple, "-ratio": LargestRatio,
-                                          "-transmission_angle": LargestLeastAngle}
+                                          "-transmission_angle": LargestLeastAngle,
+                                          "phases": LeastCount}
 
 
 def objectives() -> dict[str, type[Objective]]:

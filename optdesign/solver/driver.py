@@ -943,6 +943,13 @@ def solve(problem, progress=None) -> SolveResult:
         per_phase.append(solve_phase(problem, n, neighbours=neighbours))
         if progress:
             progress()
+    return summarized(problem, per_phase, t0)
+
+
+def summarized(problem, per_phase: list[PhaseResult], t0: float) -> SolveResult:
+    """The SolveResult of the counts solved (``per_phase``, in order) since ``t0``
+    (``time.perf_counter()``): the best optimal count by the objective, else infeasible
+    when every count is, else failed."""
     ok = [p for p in per_phase if p.status == "optimal"]
     objective = objective_of(problem)
     if is_robust(problem):      # a robust solve ranks by the tolerance box's worst δ

@@ -13,6 +13,7 @@ def summary_text(result, problem) -> str:
 
     lines = [f"{problem.name}: {result.status} ({problem.mechanism}, {problem.stroke} stroke, "
              f"{input_speed_text(problem.input_speed)})"]
+    lines += least_count_lines(result.least_count, problem.model.count_variable)
     if result.design:
         lengths = set(problem.model.lengths)
         lines.append("design: " + ", ".join(f"{k} = {v:.4f} mm" if k in lengths else
@@ -57,6 +58,34 @@ def summary_text(result, problem) -> str:
             lines.append(f"  n = {p.count}: {p.status}: {p.message}")
     lines.append("every figure above is the exact evaluator's, not the NLP surrogate's")
     return "\n".join(lines)
+
+
+def least_count_lines(record: dict, name: str) -> list[str]:
+    """With ``minimize: phases``: the least count meeting the ripple cap, the least δ of
+    each count below it (why it fails) and what was not solved; nothing otherwise."""
+    if not record:
+        return []
+    bound = f"δ ≤ {record['bound']:g} ({record['key']})"
+    below = [r for r in record["counts"] if not r["meets"]]
+    if record["count"] is None:
+        head = f"least count for {bound}: none of the admissible {name} meets it"
+    else:
+        head = f"least count for {bound}: {name} = {record['count']}"
+    lines = [head + (" (each count solved for its least δ)" if not below else "")]
+    if below:
+        lines.append("the least δ of each count " + ("below it" if record["count"] is not None
+                                                       else "solved") + ": " + "; ".join(
+            f"n = {r['count']}: {r['delta']:.6f} > {record['bound']:g}"
+            if r["status"] == "infeasible" and r["delta"] is not None
+            else f"n = {r['count']}: {r['status']} ({r['message']})" for r in below))
+    if record["unsettled"] and record["count"] is not None:
+        lines.append(f"warning: the solve of {name} = "
+                     f"{', '.join(str(n) for n in record['unsettled'])} found no verified "
+                     f"optimum and no verdict: a smaller count may meet the bound")
+    if record["not_solved"]:
+        lines.append(f"{name} = {', '.join(str(n) for n in record['not_solved'])}: not solved "
+                     f"(a larger count than the least)")
+    return lines
 
 
 def binding_text(active: list[dict], problem) -> str:

@@ -111,6 +111,9 @@ class SolveResult(Tabular):
     worst_case_delta: float | None = None
     #: every quantity's exact value of the best design (see PhaseResult.quantities)
     quantities: dict = field(default_factory=dict)
+    #: with ``minimize: phases``: the least count meeting the ripple cap and each count's
+    #: least δ (:func:`optdesign.solver.least_count.least_count`); empty otherwise
+    least_count: dict = field(default_factory=dict)
 
     def ripples(self):
         """The optimum's δ named (:class:`optdesign.evaluation.ripples.Ripples`): the worst
@@ -142,13 +145,16 @@ class SolveResult(Tabular):
     @property
     def fun(self) -> float | None:
         """scipy's name: the objective at the optimum (δ, -ratio or the quantity's value, as
-        ``objective.minimize`` says; the robust solve's worst δ)."""
+        ``objective.minimize`` says; the count with ``minimize: phases``; the robust
+        solve's worst δ)."""
         best = self.best_phase()
         if best is None:
             return None
         if self.worst_case_delta is not None:
             return self.worst_case_delta
         minimize = self.objective.get("minimize", "ripple")
+        if minimize == "phases":
+            return float(best.count)
         value = best.quantities["values"][minimize.lstrip("-")]
         return -value if minimize.startswith("-") else value
 
@@ -172,9 +178,12 @@ class SolveResult(Tabular):
     def summary(self) -> str:
         if self.design is None:
             return f"{self.name}: {self.status}" + (f" ({self.message})" if self.message else "")
-        return (f"{self.name}: {self.status}, δ = {self.delta:.6g}, ratio = {self.ratio:.6g}, "
-                f"least transmission angle {self.min_transmission_angle_deg:.2f}° "
-                f"({self.solve_time_s:.2f} s)")
+        least = self.least_count
+        count = (f", least count {least['count']} for δ ≤ {least['bound']:g}"
+                 if least.get("count") is not None else "")
+        return (f"{self.name}: {self.status}{count}, δ = {self.delta:.6g}, ratio = "
+                f"{self.ratio:.6g}, least transmission angle "
+                f"{self.min_transmission_angle_deg:.2f}° ({self.solve_time_s:.2f} s)")
 
     def to_frame(self):
         """One row per count (named by its mechanism: phases, sections, freewheels): status,

@@ -63,7 +63,7 @@ def test_a_child_forked_with_signals_held_sets_its_own():
     assert beside(signal.getsignal, signal.SIGTERM)() == signal.SIG_DFL
 
 
-def test_casadi_swallows_a_ctrl_c_during_ipopt_and_interrupts_kept_raises_it_again():
+def test_casadi_swallows_a_ctrl_c_during_ipopt_and_interrupts_kept_raises_it_again(request):
     import threading
 
     import casadi as ca
@@ -71,9 +71,15 @@ def test_casadi_swallows_a_ctrl_c_during_ipopt_and_interrupts_kept_raises_it_aga
     from optdesign.lifetime import interrupts_kept
 
     x = ca.MX.sym("x", 300)
+    # a run that only a Ctrl-C ends (or, should none arrive, a minute of CPU: the test then
+    # fails instead of hanging the suite)
     solver = ca.nlpsol("s", "ipopt", {"x": x, "f": ca.sumsqr(ca.sin(x) - ca.cos(ca.cumsum(x)))},
                        {"ipopt.print_level": 0, "print_time": 0, "ipopt.max_iter": 100000,
-                        "ipopt.tol": 1e-300, "ipopt.acceptable_iter": 0})
+                        "ipopt.tol": 1e-300, "ipopt.acceptable_iter": 0,
+                        "ipopt.max_cpu_time": 60.0})
+    # Python's own Ctrl-C handler, whatever an earlier test of this worker left behind
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    request.addfinalizer(lambda: signal.signal(signal.SIGINT, previous))
 
     def interrupted_run():
         timer = threading.Timer(0.2, os.kill, (os.getpid(), signal.SIGINT))

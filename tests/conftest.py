@@ -161,3 +161,23 @@ def executed_notebook(name: str, monkeypatch, edit=None) -> tuple:
                                      resources={"metadata": {"path": str(ROOT / "notebooks")}})
     client.execute()
     return nb, [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])]
+
+
+class SignalLeft(UserWarning):
+    """A test left the process's Ctrl-C handler changed (restored for the next test)."""
+
+
+@pytest.fixture(autouse=True)
+def _ctrl_c_as_python_sets_it():
+    """Every test starts with Python's own SIGINT handler, and one that leaves another behind
+    is named in the warnings summary (the tests of Ctrl-C need the default; a worker of the
+    suite once ran with SIGINT ignored, left so by an earlier test file)."""
+    import signal
+    import warnings
+
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    left = signal.getsignal(signal.SIGINT)
+    if left is not signal.default_int_handler:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        warnings.warn(SignalLeft(f"this test left SIGINT handled by {left!r}"))

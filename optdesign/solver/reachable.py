@@ -139,7 +139,9 @@ def reach_of(problem, count: int, binding: str | None, solve_phase, workers: int
             searched = replace(variant, solver=replace(
                 variant.solver, starts=min(variant.solver.starts, starts)))
             best = solve_phase(searched, count, workers=workers, explain=False)
-            designs = ([best.design] if best.status == "optimal" else []) + list(known)
+            # the known designs are verified once, with the first pass
+            designs = ([best.design] if best.status == "optimal" else []) + \
+                (list(known) if reach is None else [])
             reach = _nearest(problem, name, designs, read, reach,
                              (figure, float(bound), side, unit))
             if reach is None or not reach.out_of_reach or _far(reach) or \

@@ -124,35 +124,38 @@ def _short(text: str, limit: int = 40) -> str:
 def read_text(path: Path) -> str:
     """The file's text: a regular file (not a FIFO, a device or a folder, which could block
     or never end), at most ``MAX_FILE_BYTES``, UTF-8."""
+    name = str(path)
+    # as the message shows it: a newline in a name would break the one-line message
+    where = name if name.isprintable() else shown(name, len(repr(name)))
     try:
-        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+        fd = os.open(name, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
     except FileNotFoundError:
-        raise ProblemError(f"{path}: no such file") from None
+        raise ProblemError(f"{where}: no such file") from None
     except OSError as exc:
-        raise ProblemError(f"{path}: cannot be read ({exc.strerror or type(exc).__name__})") \
+        raise ProblemError(f"{where}: cannot be read ({exc.strerror or type(exc).__name__})") \
             from None
     except ValueError:                  # a NUL byte in the path
-        raise ProblemError(f"{path}: is not a file name") from None
+        raise ProblemError(f"{where}: is not a file name") from None
     mode = os.fstat(fd).st_mode
     if not stat.S_ISREG(mode):
         os.close(fd)
         if stat.S_ISDIR(mode):
-            raise ProblemError(f"{path}: is a folder, not a problem file")
-        raise ProblemError(f"{path}: is not a regular file (a pipe or a device); "
+            raise ProblemError(f"{where}: is a folder, not a problem file")
+        raise ProblemError(f"{where}: is not a regular file (a pipe or a device); "
                            f"save it to a file")
     with os.fdopen(fd, "rb") as fh:
         try:
             data = fh.read(MAX_FILE_BYTES + 1)
         except OSError as exc:
-            raise ProblemError(f"{path}: cannot be read "
+            raise ProblemError(f"{where}: cannot be read "
                                f"({exc.strerror or type(exc).__name__})") from None
     if len(data) > MAX_FILE_BYTES:
-        raise ProblemError(f"{path}: is larger than {MAX_FILE_BYTES // 1024} KiB; a problem "
+        raise ProblemError(f"{where}: is larger than {MAX_FILE_BYTES // 1024} KiB; a problem "
                            f"file is a few kB")
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        raise ProblemError(f"{path}: is not UTF-8 text (byte {exc.start})") from None
+        raise ProblemError(f"{where}: is not UTF-8 text (byte {exc.start})") from None
 
 
 def parse(text: str, where: str):

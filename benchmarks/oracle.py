@@ -163,7 +163,7 @@ def _sampled_values(problem, names) -> dict:
     if not names:
         return {}
     specs = tuple(QuantityBound(n) for n in dict.fromkeys(names + ["ripple"]))
-    loose = replace(problem, constraints=replace(problem.constraints, quantities=specs))
+    loose = problem.with_quantity_bounds(specs)
     X, count = _box_sample(loose, 1024, 7)
     sampled: dict = {}
     sampled_scores(loose, count, _base(loose, count), loose.free_lengths(), X, sampled)
@@ -253,7 +253,7 @@ def run(draw: Draw) -> dict:
             "initial": draw.initial, "objective": problem.objective.minimize,
             "bounds": ", ".join(f"{s.key}{'≥' if math.isfinite(s.lower) else ''}"
                                 f"{'≤' if math.isfinite(s.upper) else ''}"
-                                for s in problem.constraints.quantities),
+                                for s in problem.quantity_bounds),
             "status": result.status, "solve_s": seconds, "checked": found.checked,
             "sampled_feasible": len(found.feasible), "false": len(claims),
             "claims": "; ".join(claims)}

@@ -50,7 +50,7 @@ def make_problem(phases: int, samples: int | None, min_ratio: float | None):
     if samples is not None:
         problem = replace(problem, solver=replace(problem.solver, samples=samples))
     if min_ratio is not None:
-        problem = replace(problem, objective=replace(problem.objective, min_ratio=min_ratio))
+        problem = problem.with_limit("ratio", "lower", min_ratio or None)
     return problem
 
 
@@ -66,7 +66,7 @@ def child(spec: str) -> None:
         v = verify(problem, r.design)
         check = {"feasible": bool(v.feasible), "delta": v.delta}
     print("@@RUN@@" + json.dumps(run | {"verified": check, "samples": problem.solver.samples,
-                                        "min_ratio": problem.objective.min_ratio}))
+                                        "min_ratio": problem.constraints.min_ratio}))
 
 
 def run(phases: int, samples: int | None, timeout: float, log) -> dict:

@@ -119,7 +119,7 @@ def load_case(name: str):
         problem = replace(problem, design={**problem.design,
                                            key: Variable(key, value=float(phases))})
     if min_ratio is not None:
-        problem = replace(problem, objective=replace(problem.objective, min_ratio=min_ratio))
+        problem = problem.with_limit("ratio", "lower", min_ratio or None)
     return problem
 
 
@@ -276,7 +276,7 @@ class DesignerModel:
         margin = ANGLE_MARGIN_DEG["refined" if refine else "plain"]
         self.cos_limit = min(math.cos(math.radians(c.min_transmission_angle_deg + margin)),
                              math.sqrt(1 - c.assembly_margin))
-        self.min_ratio = problem.objective.min_ratio
+        self.min_ratio = problem.constraints.min_ratio
         self.opts = problem.options
         self.nfev = 0
 

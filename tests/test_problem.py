@@ -186,7 +186,7 @@ def test_numbers_outside_the_magnitude_range(write_problem, value, message):
 
 def test_zero_and_the_range_ends_are_accepted(write_problem):
     p = load_problem(write_problem(base_problem(input_speed=1e100, objective={"min_ratio": 0})))
-    assert p.input_speed == 1e100 and p.objective.min_ratio == 0
+    assert p.input_speed == 1e100 and p.constraints.min_ratio == 0
     assert load_problem(write_problem(base_problem(input_speed=1e-100))).input_speed == 1e-100
 
 
@@ -194,7 +194,7 @@ def test_a_merge_key_overridden_is_not_a_duplicate(write_problem):
     text = (ROOT / "problems" / "sharkov2022.yaml").read_text().replace(
         "objective:\n", "objective:\n  <<: {ripple: mean, min_ratio: 0.1}\n")
     p = load_problem(write_problem(text))
-    assert p.objective.ripple == "midrange" and p.objective.min_ratio == 0.0
+    assert p.objective.ripple == "midrange" and p.constraints.min_ratio == 0.0
 
 
 def test_a_name_from_a_long_file_stem_is_cut_to_the_limit(tmp_path):

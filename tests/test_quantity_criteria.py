@@ -57,15 +57,21 @@ def test_the_older_keys_and_their_quantity_names_load_the_same_problem():
     data = _data(objective__min_ratio=0.3)
     b = problem_from_dict(data)
     assert a.constraints == b.constraints and a.objective == b.objective
-    assert a.objective.min_ratio == 0.3 and a.constraints.min_transmission_angle_deg == 40
-    # a ripple cap is objective.max_ripple under the largest ratio, a bound of its own else
+    assert a.constraints.min_ratio == 0.3 and a.constraints.min_transmission_angle_deg == 40
+    # the older keys are read into bounds on their quantities, not the other way round
+    assert {"ratio", "transmission_angle"} <= {s.name for s in a.constraints.bounds}
+    assert not {"ratio", "transmission_angle"} & {s.name for s in a.quantity_bounds}
+    # a ripple cap is held with the largest ratio's objective, a bound of its own else
     c = problem_from_dict(_data(objective={"minimize": "-ratio"},
                                 constraints__ripple={"upper": 0.2}))
-    assert c.objective.max_ripple == 0.2 and not any(
-        s.name == "ripple" for s in c.constraints.quantities)
+    assert c.constraints.max_ripple == 0.2 and not any(
+        s.name == "ripple" for s in c.quantity_bounds)
     d = problem_from_dict(_data(constraints__ripple={"upper": 0.2}))
-    assert d.objective.max_ripple is None
+    assert d.constraints.max_ripple == 0.2
     assert [s.key for s in quantity_specs(d)] == ["housing_radius", "ripple"]
+    # objective.max_ripple is the same bound, whatever the objective
+    e = problem_from_dict(_data(objective__max_ripple=0.2))
+    assert e.constraints == d.constraints and e.quantity_bounds == d.quantity_bounds
 
 
 # --------------------------------------------------------------------------- solves
@@ -91,7 +97,7 @@ def test_a_housing_bound_binds_exactly_and_no_sampled_design_beats_the_optimum()
     problem = load_problem(HOUSING_FILE)
     result = solve(problem)
     assert result.status == "optimal"
-    bound = problem.constraints.quantities[0]
+    bound = problem.quantity_bounds[0]
     values = result.quantities["values"]
     assert values["housing_radius"] <= bound.upper * (1 + 1e-7)
     assert values["housing_radius"] == pytest.approx(bound.upper, rel=1e-7)   # it binds

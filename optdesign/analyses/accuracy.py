@@ -156,9 +156,10 @@ def surrogate_figures(problem, values, samples: int, smoothing: float):
 
     fixed = problem.with_values(values)
     fixed = replace(fixed, solver=replace(problem.solver, samples=samples, smoothing=smoothing),
-                    objective=replace(problem.objective, minimize="ripple", min_ratio=0.0,
-                                      robust="none"),
-                    constraints=replace(problem.constraints, quantities=()),
+                    objective=replace(problem.objective, minimize="ripple", robust="none"),
+                    constraints=replace(problem.constraints, bounds=tuple(
+                        b for b in problem.constraints.bounds
+                        if b.name == "transmission_angle" and b.at is None)),
                     eccentricities=(1.0,), eccentricity_range=None)
     count = int(round(values[problem.model.count_variable]))
     solver = PhaseSolver(fixed, count)

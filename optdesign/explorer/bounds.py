@@ -56,10 +56,10 @@ def bounds_of(problem) -> list[Bound]:
             out.append(Bound(key, "least transmission angle", "deg",
                              problem.constraints.min_transmission_angle_deg, 0.0, 89.0, "lower"))
         elif isinstance(c, RatioFloor):
-            value = problem.objective.min_ratio
+            value = problem.constraints.min_ratio
             out.append(Bound(key, "least ratio", "-", value, 0.0, _span(value, 1.0), "lower"))
-        elif isinstance(c, RippleCap) and problem.objective.max_ripple is not None:
-            value = problem.objective.max_ripple
+        elif isinstance(c, RippleCap) and problem.constraints.max_ripple is not None:
+            value = problem.constraints.max_ripple
             out.append(Bound(key, "largest δ", "-", value, 0.0, _span(value, 1.0), "upper"))
         elif isinstance(c, LengthConstraint) and _FILE_KEY.fullmatch(key) \
                 and _declared_number(problem, key):

@@ -91,7 +91,7 @@ def with_axis(problem):
 
     axis = axis_of(problem)
     if axis.is_ratio or any(s.name == axis.name and s.at is None
-                            for s in problem.constraints.quantities):
+                            for s in problem.quantity_bounds):
         return problem
-    specs = problem.constraints.quantities + (QuantityBound(axis.name),)
-    return replace(problem, constraints=replace(problem.constraints, quantities=specs))
+    specs = problem.quantity_bounds + (QuantityBound(axis.name),)
+    return problem.with_quantity_bounds(specs)

@@ -114,11 +114,11 @@ def solve_end(problem, count: int, kind: str) -> dict:
         point.iterations, point.tries = res.iterations, len(res.starts)
         if res.status != "optimal":
             return point.record(res.status, note=res.message)
-        slack = res.ratio - problem.objective.min_ratio > 1e-6 if axis.is_ratio else True
+        slack = res.ratio - problem.constraints.min_ratio > 1e-6 if axis.is_ratio else True
         return point.record("optimal", res.design, _Ver.of(res), 0.0 if slack else None,
                             "Solve_Succeeded", active=res.active)
-    q = replace(problem, objective=replace(problem.objective, minimize=axis.objective,
-                                           max_ripple=LOOSE_MAX_RIPPLE))
+    q = replace(problem, objective=replace(problem.objective, minimize=axis.objective)
+                ).with_limit("ripple", "upper", LOOSE_MAX_RIPPLE)
     res = solve_phase(q, count, solver=_solver(q, count))
     point.iterations, point.tries = res.iterations, len(res.starts)
     if res.status != "optimal":

@@ -24,7 +24,9 @@ from optdesign.mechanisms import get_mechanism, known
 from optdesign.problem.plausibility import warn_implausible
 from optdesign.problem.yaml_text import parse, read_text
 from optdesign.quantities import known as known_quantities
-from optdesign.quantities.bounds import ALIASES, declarations as quantity_declarations, read_bound
+from optdesign.quantities.bounds import (ALIASES, QuantityBound, generic,
+                                         held_apart, read_bound, side_of, with_generic,
+                                         with_side, declarations as quantity_declarations)
 from optdesign.quantities.criteria import objectives
 
 #: Optional sections parsed by the module that owns them, imported only when present:
@@ -90,21 +92,29 @@ class Variable:
         return list(range(int(self.lower), int(self.upper) + 1))
 
 
+#: the least transmission angle a problem holds unless its file says otherwise, deg
+DEFAULT_MIN_TRANSMISSION_ANGLE_DEG = 40.0
+
+
 @dataclass(frozen=True)
 class Constraints:
     """Design constraints; every one is stated as g >= 0 in the NLP."""
 
-    min_transmission_angle_deg: float = 40.0
     assembly_margin: float = 1e-3       # 1 - cos²μ >= margin at every sample
     #: the mechanism's own keys (``Mechanism.constraint_declarations``, e.g. the four-bar's
     #: ``min_pin_radius`` and ``grashof``), each at its value or its declared default
     own: Mapping[str, Any] = field(default_factory=dict)
     extra: Mapping[str, Any] = field(default_factory=dict)   # keys other modules own
-    #: bounds on quantities (``constraints: {QUANTITY: {lower, upper, at}}``) other than the
-    #: three that stand for older keys (optdesign.quantities.bounds)
-    quantities: tuple = ()
-    #: the file's own key of a bound read into an older one (``{"min_ratio":
-    #: "constraints.ratio.lower"}``), so that messages name what the user wrote
+    #: every bound on a quantity (optdesign.quantities.bounds), one per key, whichever key of
+    #: the file gave it: ``constraints: {QUANTITY: {lower, upper, at}}`` or an older key
+    #: (``objective.min_ratio`` is the ratio's lower bound, ``objective.max_ripple`` the
+    #: ripple's upper one, ``constraints.min_transmission_angle_deg`` the transmission angle's
+    #: lower one); :attr:`Problem.quantity_bounds` are those held as bounds on a quantity
+    bounds: tuple = (QuantityBound("transmission_angle",
+                                   lower=DEFAULT_MIN_TRANSMISSION_ANGLE_DEG),)
+    #: the file's own key of each side of a bound that has an older key, by side
+    #: (``{"ratio.lower": "constraints.ratio.lower"}``), so that messages name what the user
+    #: wrote (optdesign.quantities.bounds.file_key)
     spelled: Mapping[str, str] = field(default_factory=dict, compare=False)
 
     def __getattr__(self, name: str):
@@ -114,13 +124,34 @@ class Constraints:
             return own[name]
         raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
+    # the older keys, read from the bounds
+    @property
+    def min_transmission_angle_deg(self) -> float:
+        """The least transmission angle held, deg (0: none)."""
+        return max(side_of(self.bounds, "transmission_angle", "lower"), 0.0)
+
+    @property
+    def min_ratio(self) -> float:
+        """The ratio's floor (0: none)."""
+        return max(side_of(self.bounds, "ratio", "lower"), 0.0)
+
+    @property
+    def max_ripple(self) -> float | None:
+        """The cap on the worst δ, or None."""
+        cap = side_of(self.bounds, "ripple", "upper")
+        return cap if math.isfinite(cap) else None
+
+    def with_limit(self, name: str, side: str, value: float | None) -> "Constraints":
+        """These constraints with the ``side`` of the bound on quantity ``name`` (at its
+        default eccentricity) at ``value``; None drops it: ``with_limit("ratio", "lower",
+        0.3)`` is ``objective.min_ratio: 0.3``."""
+        return replace(self, bounds=with_side(self.bounds, name, side, value))
+
 
 @dataclass(frozen=True)
 class Objective:
     minimize: str = "ripple"            # ripple | -ratio
     ripple: str = "midrange"            # midrange (paper) | mean (time mean)
-    min_ratio: float = 0.0
-    max_ripple: float | None = None
     robust: str = "none"                # none | worst_case (over the tolerances: box)
 
 
@@ -181,9 +212,9 @@ OBJECTIVE_KEYS: tuple[Key, ...] = (
         "(ω_max + ω_min)/2 as in the papers, or mean, the time mean of the output speed",
         default=Objective.ripple, choices=RIPPLE_DEFINITIONS),
     Key("min_ratio", "number", "least ratio: time mean of the output speed / ω1, at full "
-        "eccentricity", unit="-", default=Objective.min_ratio, lower=0),
+        "eccentricity", unit="-", default=0.0, lower=0),
     Key("max_ripple", "number", "largest δ allowed", unit="-",
-        default=Objective.max_ripple, default_text="none", lower=0, open_lower=True,
+        default=None, default_text="none", lower=0, open_lower=True,
         example=0.5, condition="required with minimize: -ratio or phases"),
     Key("robust", "choice", "none: the nominal design; worst_case: minimise the worst δ over "
         "the tolerances: box, every part of it assembling and meeting every constraint "
@@ -206,7 +237,7 @@ EXTRA_CONSTRAINT_SECTIONS: dict[str, str] = {"max_speed_fraction_of_critical": "
 CONSTRAINT_KEYS: tuple[Key, ...] = (
     Key("min_transmission_angle_deg", "number", "least transmission angle min(μ, 180° − μ) "
         "of every chain over the turn, at every listed eccentricity", unit="deg",
-        default=Constraints.min_transmission_angle_deg, lower=0, upper=90, open_upper=True),
+        default=DEFAULT_MIN_TRANSMISSION_ANGLE_DEG, lower=0, upper=90, open_upper=True),
     Key("assembly_margin", "number", "margin of assembly at every sample (1 − cos²μ for a "
         "linkage; 1 − L/XD, 1 − r1/a for the slotted lever and the pulse reducer)", unit="-",
         default=Constraints.assembly_margin, lower=0, upper=1, open_upper=True),
@@ -326,6 +357,28 @@ class Problem:
     @property
     def model(self):
         return get_mechanism(self.mechanism)
+
+    @property
+    def quantity_bounds(self) -> tuple:
+        """The bounds held as bounds on a quantity
+        (:class:`optdesign.quantities.criteria.QuantityConstraint`): every side of
+        ``constraints.bounds`` but those the envelope's own criteria hold (the ratio's and
+        the transmission angle's floors, and the ripple's cap where the objective brings it)."""
+        return generic(self.constraints.bounds, self._held_apart())
+
+    def with_quantity_bounds(self, specs) -> "Problem":
+        """The same problem with ``specs`` as its bounds on quantities (the sides the
+        envelope's criteria hold kept as they are)."""
+        bounds = with_generic(self.constraints.bounds, specs, self._held_apart())
+        return replace(self, constraints=replace(self.constraints, bounds=bounds))
+
+    def with_limit(self, name: str, side: str, value: float | None) -> "Problem":
+        """The same problem with one side of the bound on quantity ``name`` at ``value``
+        (None drops it): :meth:`Constraints.with_limit`."""
+        return replace(self, constraints=self.constraints.with_limit(name, side, value))
+
+    def _held_apart(self) -> frozenset:
+        return held_apart("max_ripple" in objectives()[self.objective.minimize].requires)
 
     @property
     def count_variable(self) -> Variable:
@@ -488,10 +541,11 @@ def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "pro
     design = _read_design(r, top, mech)
     options = _read_options(r, top.get("options", {}), mech)
     ecc, ecc_range = _read_regulation(r, top.get("regulation", {}))
-    constraints = _read_constraints(r, top.get("constraints", {}), mech, ecc)
-    objective = _read_objective(r, top.get("objective", {}))
-    constraints, objective = _quantity_aliases(r, top, constraints, objective)
-    _check_required(r, objective)
+    constraints, angle = _read_constraints(r, top.get("constraints", {}), mech, ecc)
+    objective, older = _read_objective(r, top.get("objective", {}))
+    constraints = _older_keys(r, constraints,
+                              older | {"min_transmission_angle_deg": angle})
+    _check_required(r, objective, constraints)
     _check_least_count(r, objective, design, mech)
     solver = _read_solver(r, top.get("solver", {}))
     sections = {}
@@ -713,61 +767,59 @@ def _read_constraints(r, raw, mech, eccentricities) -> Constraints:
           if k.name in GENERAL_CONSTRAINT_KEYS and k.name in raw}
     kw["own"] = {k.name: k.read(r, raw[k.name], f"constraints.{k.name}") if k.name in raw
                  else k.default for k in mech.constraint_declarations}
-    kw["quantities"] = tuple(read_bound(r, k, raw[k], eccentricities)
-                             for k in sorted(quantities) if k in raw)
+    kw["bounds"] = tuple(read_bound(r, k, raw[k], eccentricities)
+                         for k in sorted(quantities) if k in raw)
     kw["extra"] = {k: v for k, v in raw.items() if k in EXTRA_CONSTRAINT_KEYS}
-    return Constraints(**kw)
+    angle = kw.pop("min_transmission_angle_deg", None)
+    return Constraints(**kw), angle
 
 
-#: the criterion (optdesign.quantities.criteria) each older key is held by
-_CRITERION_OF_ALIAS = {"min_ratio": "min_ratio", "max_ripple": "max_ripple",
-                       "min_transmission_angle_deg": "transmission_angle"}
+#: the value of an older key that holds nothing (no floor)
+_NO_BOUND = {"min_ratio": 0.0, "min_transmission_angle_deg": 0.0}
 
 
-def _quantity_aliases(r, top, constraints: Constraints, objective: Objective):
-    """The bounds that stand for older keys, moved there (optdesign.quantities.bounds:
-    ``ratio.lower``, ``transmission_angle.lower``, and ``ripple.upper`` under minimize:
-    -ratio); giving both names of one bound is an error."""
-    given = {"objective": top.get("objective") or {}, "constraints": top.get("constraints") or {}}
-    kept, moved = [], {"objective": {}, "constraints": {}}
-    spelled = {}
-    for spec in constraints.quantities:
-        rest = spec
-        for side in ("lower", "upper"):
-            alias = ALIASES.get((spec.name, side))
-            value = getattr(spec, side)
-            if alias is None or not math.isfinite(value) or spec.at is not None:
-                continue
-            if spec.name == "ripple" and \
-                    "max_ripple" not in objectives()[objective.minimize].requires:
-                continue                # a cap on the least ripple: a bound of its own
-            section, key = alias
-            if key in given[section]:
-                raise r.error(f"constraints.{spec.name}.{side}",
-                              f"and {section}.{key} name the same bound: give one")
-            moved[section][key] = value
-            spelled[_CRITERION_OF_ALIAS[key]] = f"constraints.{spec.name}.{side}"
-            rest = replace(rest, **{side: math.inf if side == "upper" else -math.inf})
-        if math.isfinite(rest.lower) or math.isfinite(rest.upper):
-            kept.append(rest)
-    constraints = replace(constraints, quantities=tuple(kept), spelled=spelled,
-                          **moved["constraints"])
-    return constraints, replace(objective, **moved["objective"])
+def _older_keys(r, constraints: Constraints, older: dict) -> Constraints:
+    """The older keys (``objective.min_ratio``, ``objective.max_ripple``,
+    ``constraints.min_transmission_angle_deg``: ``older``, by key, None where the file does
+    not give it) read into the bounds on their quantities (optdesign.quantities.bounds); the
+    transmission angle at its default where neither name gives it. Giving both names of one
+    bound is an error; ``spelled`` records the name the file used."""
+    bounds, spelled = constraints.bounds, {}
+    for (name, side), (section, key) in ALIASES.items():
+        given = math.isfinite(side_of(bounds, name, side))
+        value = older.get(key)
+        if given and value is not None:
+            raise r.error(f"constraints.{name}.{side}",
+                          f"and {section}.{key} name the same bound: give one")
+        if given:
+            spelled[f"{name}.{side}"] = f"constraints.{name}.{side}"
+            continue
+        if value is not None:
+            spelled[f"{name}.{side}"] = f"{section}.{key}"
+        if value is None and key == "min_transmission_angle_deg":
+            value = DEFAULT_MIN_TRANSMISSION_ANGLE_DEG
+        if value is not None and value != _NO_BOUND.get(key):
+            bounds = with_side(bounds, name, side, value)
+    return replace(constraints, bounds=tuple(sorted(bounds, key=lambda b: b.name)),
+                   spelled=spelled)
 
 
-def _read_objective(r, raw) -> Objective:
+def _read_objective(r, raw) -> tuple[Objective, dict]:
+    """The objective, and the older keys of bounds it gives (``min_ratio``,
+    ``max_ripple``), by key."""
     raw = r.mapping(raw, "objective")
     r.known_keys(raw, "objective", names(OBJECTIVE_KEYS))
     kw = {k.name: k.read(r, raw[k.name], f"objective.{k.name}") for k in OBJECTIVE_KEYS
           if k.name in raw}
-    return Objective(**kw)
+    older = {k: kw.pop(k) for k in ("min_ratio", "max_ripple") if k in kw}
+    return Objective(**kw), older
 
 
-def _check_required(r, objective: Objective) -> None:
-    """The keys the objective needs (``max_ripple`` with ``-ratio``), given by their own
-    name or by a bound that stands for them (``constraints.ripple.upper``)."""
+def _check_required(r, objective: Objective, constraints: Constraints) -> None:
+    """The bounds the objective needs (``max_ripple`` with ``-ratio``), given by their older
+    name or by their own (``constraints.ripple.upper``)."""
     for key in objectives()[objective.minimize].requires:
-        if getattr(objective, key) is None:
+        if getattr(constraints, key) is None:
             also = " (or constraints.ripple.upper)" if key == "max_ripple" else ""
             raise r.error(f"objective.{key}", f"is required when minimize is "
                                               f"{objective.minimize}{also}")

@@ -20,6 +20,7 @@ import math
 import warnings
 
 from optdesign.errors import ProblemError, UnitWarning
+from optdesign.quantities.bounds import file_key
 
 #: lengths below this (mm) are likely metres or centimetres
 SHORTEST_MM = 1.0
@@ -40,18 +41,15 @@ def fraction_bounds(problem) -> list[tuple[str, str, float]]:
     the ripple) the problem holds."""
     spelled = problem.constraints.spelled
     out = []
-    if problem.objective.min_ratio:
-        out.append((spelled.get("min_ratio", "objective.min_ratio"), "ratio",
-                    problem.objective.min_ratio))
-    if problem.objective.max_ripple is not None:
-        out.append((spelled.get("max_ripple", "objective.max_ripple"), "ripple",
-                    problem.objective.max_ripple))
-    for bound in problem.constraints.quantities:
+    for bound in problem.constraints.bounds:
         if bound.name in FRACTION_LIMITS:
             for side in ("lower", "upper"):
                 value = getattr(bound, side)
-                if math.isfinite(value):
-                    out.append((f"constraints.{bound.key}.{side}", bound.name, value))
+                if not math.isfinite(value) or (side == "lower" and value == 0):
+                    continue
+                key = file_key(spelled, bound.name, side) if bound.at is None else \
+                    f"constraints.{bound.key}.{side}"
+                out.append((key, bound.name, value))
     return out
 
 

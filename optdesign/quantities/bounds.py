@@ -5,15 +5,20 @@ the listed ones (``at: worst``, the default; the ratio's own default is e = 1). 
 takes a bound on either side or both: on the side where it grows worse (an upper bound on the
 housing radius, a lower one on the swing) the NLP holds every tracked extreme within it; on the
 other side (a housing at least so large, a ratio band's cap) it holds the extreme the design
-attains (:mod:`optdesign.solver.nlp`). Three bounds are the file's older keys under a new
-name, with the same meaning:
-``ratio: {lower}`` is ``objective.min_ratio``, ``ripple: {upper}`` is ``objective.max_ripple``
-and ``transmission_angle: {lower}`` is ``constraints.min_transmission_angle_deg``.
+attains (:mod:`optdesign.solver.nlp`).
+
+Every bound of a problem is stored here, one :class:`QuantityBound` per key, whichever key of
+the file gave it. Three older keys are read into bounds, with the same meaning:
+``objective.min_ratio`` is ``ratio: {lower}``, ``objective.max_ripple`` is ``ripple: {upper}``
+and ``constraints.min_transmission_angle_deg`` is ``transmission_angle: {lower}``. Those sides
+(and the ripple's cap where the objective brings one: the largest ratio, the least count) are
+held by the envelope's own criteria (:data:`ENVELOPE_SIDES`,
+:mod:`optdesign.quantities.criteria`), every other side as a bound on a quantity.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from optdesign.declarations import Key
 from optdesign.quantities import get_quantity, known
@@ -25,6 +30,10 @@ AT_ONE_ECCENTRICITY = frozenset({"housing_radius", "peak_acceleration", "swing",
 ALIASES = {("ratio", "lower"): ("objective", "min_ratio"),
            ("ripple", "upper"): ("objective", "max_ripple"),
            ("transmission_angle", "lower"): ("constraints", "min_transmission_angle_deg")}
+#: the sides held by a criterion of the envelope's own in every problem (the ratio's floor,
+#: the transmission angle's floor); :data:`RIPPLE_CAP` too where the objective brings the cap
+ENVELOPE_SIDES = frozenset({("ratio", "lower"), ("transmission_angle", "lower")})
+RIPPLE_CAP = ("ripple", "upper")
 
 
 @dataclass(frozen=True)
@@ -42,6 +51,85 @@ class QuantityBound:
         return self.name if self.at is None else f"{self.name}@{self.at:g}"
 
 
+def file_key(spelled, name: str, side: str) -> str:
+    """The problem file's key of one side of the bound on ``name`` (at its default
+    eccentricity): as the file spelled it (``spelled``: :attr:`Constraints.spelled`), else the
+    older key where there is one (``objective.min_ratio``), else ``constraints.NAME.SIDE``."""
+    alias = ALIASES.get((name, side))
+    return spelled.get(f"{name}.{side}") or (".".join(alias) if alias else
+                                              f"constraints.{name}.{side}")
+
+
+def held_apart(ripple_capped: bool) -> frozenset:
+    """The (quantity, side) pairs a criterion of the envelope's own holds: the floors always,
+    the ripple's cap where the objective brings it (``ripple_capped``)."""
+    return ENVELOPE_SIDES | {RIPPLE_CAP} if ripple_capped else ENVELOPE_SIDES
+
+
+def side_of(bounds, name: str, side: str) -> float:
+    """The ``side`` of the bound on ``name`` at its default eccentricity among ``bounds``
+    (±inf where there is none)."""
+    for b in bounds:
+        if b.name == name and b.at is None:
+            return getattr(b, side)
+    return -math.inf if side == "lower" else math.inf
+
+
+def with_side(bounds, name: str, side: str, value: float | None) -> tuple:
+    """``bounds`` with the ``side`` of the bound on ``name`` (at its default eccentricity)
+    set to ``value``, or dropped where ``value`` is None."""
+    if value is None:
+        value = -math.inf if side == "lower" else math.inf
+    out, found = [], False
+    for b in bounds:
+        if b.name == name and b.at is None:
+            b, found = replace(b, **{side: float(value)}), True
+        out.append(b)
+    if not found:
+        out.append(replace(QuantityBound(name), **{side: float(value)}))
+    return ordered(b for b in out if _bounded(b))
+
+
+def ordered(bounds) -> tuple:
+    """One bound per key (the last given), in the order the keys first come."""
+    return tuple({b.key: b for b in bounds}.values())
+
+
+def _bounded(b: QuantityBound) -> bool:
+    return math.isfinite(b.lower) or math.isfinite(b.upper)
+
+
+def generic(bounds, apart: frozenset) -> tuple:
+    """The bounds held as bounds on a quantity: each of ``bounds`` without its sides in
+    ``apart`` (at its default eccentricity), dropped where nothing is left of it; a bound
+    that tracks a quantity without a side is kept."""
+    out = []
+    for b in bounds:
+        rest = b
+        if b.at is None:
+            for side in ("lower", "upper"):
+                if (b.name, side) in apart:
+                    rest = replace(rest, **{side: -math.inf if side == "lower" else math.inf})
+        if _bounded(rest) or not _bounded(b):
+            out.append(rest)
+    return tuple(out)
+
+
+def with_generic(bounds, specs, apart: frozenset) -> tuple:
+    """``bounds`` with ``specs`` as the bounds held on quantities: the sides in ``apart``
+    kept from ``bounds``, every other side from ``specs``."""
+    kept = {s.key: s for s in specs}
+    for b in bounds:
+        if b.at is not None:
+            continue
+        for side in ("lower", "upper"):
+            value = getattr(b, side)
+            if (b.name, side) in apart and math.isfinite(value):
+                spec = kept.get(b.key, QuantityBound(b.name))
+                kept[b.key] = replace(spec, **{side: value})
+    return ordered(kept.values())
+
+
 def declarations() -> tuple[Key, ...]:
     """One ``constraints:`` key per quantity, for the loader and the generated reference."""
     out = []
@@ -57,9 +145,8 @@ def declarations() -> tuple[Key, ...]:
                                    open_lower=True, upper=1)))
         alias = [f"{side}: {'.'.join(ALIASES[(name, side)])}" for side in sides
                  if (name, side) in ALIASES]
-        when = " under minimize: -ratio or phases" if name == "ripple" else ""
         meaning = f"bound on the {q.meaning}" + (
-            f" ({', '.join(alias)}{when} is the same bound)" if alias else "")
+            f" ({', '.join(alias)} is the same bound)" if alias else "")
         out.append(Key(name, "mapping", meaning, unit=q.unit, default_text="none",
                        keys=keys + ((at,) if name in AT_ONE_ECCENTRICITY else ()),
                        example={sides[0]: _EXAMPLES.get(name, 1.0)},

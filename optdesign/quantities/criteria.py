@@ -18,7 +18,7 @@ from functools import lru_cache
 from typing import Any, Mapping
 
 from optdesign.quantities import TurnQuantity, get_quantity, known, quantities_of
-from optdesign.quantities.bounds import QuantityBound
+from optdesign.quantities.bounds import QuantityBound, file_key
 
 #: weight of the worst ripple in the largest-ratio objective: a lexicographic tie-break that
 #: keeps w_hi and w_lo tight when the ripple cap is slack (the surrogate δ stays exact) for
@@ -60,7 +60,7 @@ class Measured:
 def quantity_specs(problem) -> list[QuantityBound]:
     """The quantities the problem's criteria read beyond the envelope's own: its bounds on
     quantities and its quantity objective, each once by key."""
-    specs = list(problem.constraints.quantities)
+    specs = list(problem.quantity_bounds)
     objective = objective_of(problem)
     if isinstance(objective, QuantityObjective):
         specs.append(QuantityBound(objective.quantity))
@@ -182,16 +182,14 @@ class TransmissionAngle(Constraint):
         return problem.constraints.min_transmission_angle_deg - m.min_angle_deg
 
     def key(self, problem):
-        return problem.constraints.spelled.get(self.name,
-                                               "constraints.min_transmission_angle_deg")
+        return file_key(problem.constraints.spelled, "transmission_angle", "lower")
 
     def quantity_bound(self, problem):
         mu = problem.constraints.min_transmission_angle_deg
         return QuantityBound("transmission_angle", lower=mu) if mu > 0 else None
 
     def without(self, problem):
-        return replace(problem, constraints=replace(problem.constraints,
-                                                    min_transmission_angle_deg=0.0))
+        return problem.with_limit("transmission_angle", "lower", None)
 
     def bound_per_unit(self, problem, lower):
         """The row's bound is cos²μ_min: d cos²μ_min / dμ_min = -sin 2μ_min per radian."""
@@ -211,17 +209,17 @@ class RatioFloor(Constraint):
         return q.ratio
 
     def bounds(self, problem, tightening_deg=0.0):
-        return problem.objective.min_ratio, math.inf
+        return problem.constraints.min_ratio, math.inf
 
     def key(self, problem):
-        return problem.constraints.spelled.get(self.name, "objective.min_ratio")
+        return file_key(problem.constraints.spelled, "ratio", "lower")
 
     def quantity_bound(self, problem):
-        floor = problem.objective.min_ratio
+        floor = problem.constraints.min_ratio
         return QuantityBound("ratio", lower=floor) if floor > 0 else None
 
     def without(self, problem):
-        return replace(problem, objective=replace(problem.objective, min_ratio=0.0))
+        return problem.with_limit("ratio", "lower", None)
 
 
 class RippleCap(Constraint):
@@ -233,17 +231,17 @@ class RippleCap(Constraint):
         return q.worst_ripple
 
     def bounds(self, problem, tightening_deg=0.0):
-        return -math.inf, problem.objective.max_ripple
+        return -math.inf, problem.constraints.max_ripple
 
     def key(self, problem):
-        return problem.constraints.spelled.get(self.name, "objective.max_ripple")
+        return file_key(problem.constraints.spelled, "ripple", "upper")
 
     def quantity_bound(self, problem):
-        cap = problem.objective.max_ripple
+        cap = problem.constraints.max_ripple
         return QuantityBound("ripple", upper=cap) if cap is not None else None
 
     def without(self, problem):
-        return replace(problem, objective=replace(problem.objective, max_ripple=None))
+        return problem.with_limit("ripple", "upper", None)
 
 
 class LengthConstraint(Constraint):
@@ -302,7 +300,7 @@ def spec_sides(problem, specs) -> dict[str, frozenset[str]]:
     minimised)."""
     objective = objective_of(problem)
     out = {s.key: frozenset() for s in specs}
-    for spec in problem.constraints.quantities:
+    for spec in problem.quantity_bounds:
         out[spec.key] = out.get(spec.key, frozenset()) | bounded_sides(spec)
     if isinstance(objective, QuantityObjective) and objective.quantity in out:
         out[objective.quantity] |= {"lower" if objective.maximize else "upper"}
@@ -314,7 +312,7 @@ def spec_forms(problem, specs, sides: dict) -> dict[str, frozenset[str]]:
     its natural side (and where nothing bounds it: it is read over the regulation interval),
     ``attained`` for the other."""
     out = {}
-    bounded = {s.key for s in problem.constraints.quantities}   # a row each, always
+    bounded = {s.key for s in problem.quantity_bounds}   # a row each, always
     for key, sides in sides.items():
         natural = get_quantity(next(s.name for s in specs if s.key == key)).natural_side()
         forms = {"natural"} if natural in sides or key in bounded else set()
@@ -382,7 +380,7 @@ class QuantityConstraint(Constraint):
     def bounds(self, problem, tightening_deg=0.0):
         """The bound of ``problem``'s spec of this key (a Pareto point's ε moves it without
         rebuilding the NLP)."""
-        spec = next((s for s in problem.constraints.quantities if s.key == self.spec.key),
+        spec = next((s for s in problem.quantity_bounds if s.key == self.spec.key),
                     self.spec)
         return spec.lower, spec.upper
 
@@ -394,8 +392,8 @@ class QuantityConstraint(Constraint):
         return self.spec
 
     def without(self, problem):
-        others = tuple(s for s in problem.constraints.quantities if s.key != self.spec.key)
-        return replace(problem, constraints=replace(problem.constraints, quantities=others))
+        others = tuple(s for s in problem.quantity_bounds if s.key != self.spec.key)
+        return problem.with_quantity_bounds(others)
 
     def key(self, problem):
         """``constraints.ratio.upper``: the side where one is given alone."""
@@ -434,7 +432,7 @@ def constraints_of(problem) -> list[Constraint]:
     out: list[Constraint] = [TransmissionAngle(), RatioFloor()]
     out += objective_of(problem).constraints(problem)
     out += problem.model.criteria(problem.constraints, problem.options)
-    out += [QuantityConstraint(spec) for spec in problem.constraints.quantities]
+    out += [QuantityConstraint(spec) for spec in problem.quantity_bounds]
     for key, section in problem.sections.items():
         if hasattr(section, "solve_constraints"):
             out.append(SectionConstraint(key, section, problem))

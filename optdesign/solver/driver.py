@@ -270,12 +270,10 @@ class PhaseSolver:
     def at(self, min_ratio=None, max_ripple=None, bound=None):
         """The problem with a Pareto point's bounds (see :meth:`solve_from`)."""
         problem = self.problem
-        if min_ratio is not None or max_ripple is not None:
-            obj = replace(problem.objective,
-                          min_ratio=problem.objective.min_ratio if min_ratio is None else min_ratio,
-                          max_ripple=problem.objective.max_ripple if max_ripple is None
-                          else max_ripple)
-            problem = replace(problem, objective=obj)
+        if min_ratio is not None:
+            problem = problem.with_limit("ratio", "lower", min_ratio or None)
+        if max_ripple is not None:
+            problem = problem.with_limit("ripple", "upper", max_ripple)
         if bound is not None:
             problem = tightened(problem, bound)
         return problem
@@ -711,7 +709,7 @@ def tightened(problem, bound):
     """``problem`` with its bound of ``bound``'s quantity (at the same eccentricity)
     intersected with ``bound``."""
     specs, found = [], False
-    for spec in problem.constraints.quantities:
+    for spec in problem.quantity_bounds:
         if spec.key == bound.key:
             spec = replace(spec, lower=max(spec.lower, bound.lower),
                            upper=min(spec.upper, bound.upper))
@@ -719,7 +717,7 @@ def tightened(problem, bound):
         specs.append(spec)
     if not found:
         specs.append(bound)
-    return replace(problem, constraints=replace(problem.constraints, quantities=tuple(specs)))
+    return problem.with_quantity_bounds(specs)
 
 
 def _no_optimum(result: PhaseResult, problem) -> PhaseResult:
@@ -805,7 +803,7 @@ def _quantities_wanted(problem, ev, held_es) -> list[tuple[float, float]]:
     bounded one when the interval's worst breaks the bound."""
     worst, out = ev.worst, []
     objective = objective_of(problem)
-    bounds = {s.name: s for s in problem.constraints.quantities if s.at is None}
+    bounds = {s.name: s for s in problem.quantity_bounds if s.at is None}
     for name in interval_quantities(problem):
         e, value = worst.quantities[name]
         q = get_quantity(name)
@@ -979,8 +977,8 @@ def summarized(problem, per_phase: list[PhaseResult], t0: float) -> SolveResult:
         iterations=sum(p.iterations for p in per_phase),
         per_phase=per_phase,
         objective={"minimize": problem.objective.minimize, "ripple": problem.objective.ripple,
-                   "min_ratio": problem.objective.min_ratio,
-                   "max_ripple": problem.objective.max_ripple,
+                   "min_ratio": problem.constraints.min_ratio,
+                   "max_ripple": problem.constraints.max_ripple,
                    "eccentricities": list(problem.eccentricities),
                    **({"eccentricity_range": list(problem.eccentricity_range)}
                       if problem.eccentricity_range is not None else {})},

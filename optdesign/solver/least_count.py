@@ -30,8 +30,8 @@ SECONDARY = "ripple"
 def per_count(problem):
     """The problem each count is solved as: the least δ under every constraint of
     ``problem`` but the ripple cap (an atlas cell's problem, with the file's constraints)."""
-    return replace(problem, objective=replace(problem.objective, minimize=SECONDARY,
-                                              max_ripple=None))
+    return replace(problem, objective=replace(problem.objective, minimize=SECONDARY)
+                   ).with_limit("ripple", "upper", None)
 
 
 def least_count(problem, progress=None) -> SolveResult:
@@ -54,7 +54,7 @@ def least_count(problem, progress=None) -> SolveResult:
         (docs/contract.md).
     """
     t0 = time.perf_counter()
-    cap = problem.objective.max_ripple
+    cap = problem.constraints.max_ripple
     each = per_count(problem)
     name = problem.model.count_variable
     per_phase: list[PhaseResult] = []

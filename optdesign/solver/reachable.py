@@ -85,15 +85,12 @@ def relaxed(problem, name: str):
     quantity = get_quantity(spec.name)
     variant = criterion.without(problem)
     goal = f"-{spec.name}" if side == "lower" else spec.name
-    kept = () if goal == problem.objective.minimize else tuple(
-        c.quantity_bound(problem) for c in objective_of(problem).constraints(problem)
-        if c.name != name)
-    objective = replace(variant.objective, robust="none", minimize=goal)
-    if "max_ripple" in objectives()[goal].requires and objective.max_ripple is None:
-        objective = replace(objective, max_ripple=LOOSE_RIPPLE)
-    variant = replace(variant, objective=objective, constraints=replace(
-        variant.constraints, quantities=variant.constraints.quantities + tuple(
-            k for k in kept if k is not None)))
+    # every other bound stays, held by whichever criterion the new objective gives it (the
+    # ripple's cap of a largest ratio becomes a bound on the ripple)
+    variant = replace(variant, objective=replace(variant.objective, robust="none",
+                                                 minimize=goal))
+    if "max_ripple" in objectives()[goal].requires and variant.constraints.max_ripple is None:
+        variant = variant.with_limit("ripple", "upper", LOOSE_RIPPLE)
     bound = spec.lower if side == "lower" else spec.upper
     return (variant, lambda m: value_of(problem, spec, m.evaluation),
             quantity.words or spec.name, "largest" if side == "lower" else "least", bound,

@@ -45,7 +45,7 @@ def worst_cases(problem, values, in_parallel: bool = False) -> tuple:
     The box's nominal and start pool are evaluated once for every search; ``in_parallel``:
     the searches after δ's run in a forked child beside it (two cores; the same results)."""
     tolerances = problem.sections["tolerances"]
-    keys = ("ripple", "transmission_angle") + tuple(s.key for s in problem.constraints.quantities)
+    keys = ("ripple", "transmission_angle") + tuple(s.key for s in problem.quantity_bounds)
     shared: dict = {}
 
     def search(names):
@@ -120,7 +120,7 @@ def broken_bound(problem, case) -> float:
     when it keeps it, inf when the part does not assemble)."""
     if not case.assembles:
         return math.inf
-    spec = next(s for s in problem.constraints.quantities if s.key == case.quantity)
+    spec = next(s for s in problem.quantity_bounds if s.key == case.quantity)
     return bound_excess(spec, case.value)
 
 
@@ -213,10 +213,10 @@ def corner_violations(problem, values, memo: dict | None = None
     length_rules = [c for c in constraints_of(problem) if isinstance(c, LengthConstraint)]
     corners = _corners(box)
     near_floor = np.zeros(len(corners), dtype=bool)
-    if problem.objective.min_ratio > 0:
+    if problem.constraints.min_ratio > 0:
         screened = (memo or {}).get("corners") or evaluate_offsets(
             problem, box, corners, memo=memo, nominal=(memo or {}).get("nominal"))[0]
-        near_floor = ~(screened["ratio"] >= problem.objective.min_ratio - TOL_RATIO +
+        near_floor = ~(screened["ratio"] >= problem.constraints.min_ratio - TOL_RATIO +
                        RATIO_SCREEN_MARGIN)
     out: dict[str, float] = {}
     for offsets, check_ratio in zip(corners, near_floor):
@@ -229,9 +229,9 @@ def corner_violations(problem, values, memo: dict | None = None
                 out[rule.name] = (amount, tuple(offsets))
         if check_ratio:
             ratio = exact_part(problem, part)["ratio"]
-            short = problem.objective.min_ratio - ratio
+            short = problem.constraints.min_ratio - ratio
             short = short if math.isfinite(short) else math.inf
-            if not ratio >= problem.objective.min_ratio - TOL_RATIO and \
+            if not ratio >= problem.constraints.min_ratio - TOL_RATIO and \
                     short > out.get("min_ratio", (-math.inf,))[0]:
                 out["min_ratio"] = (short, tuple(offsets))
     return out

@@ -87,18 +87,18 @@ def summary(frame, problem) -> dict:
         out[key] = {"mean": float(v.mean()), "std": float(v.std()), "min": float(v.min()),
                     "max": float(v.max()),
                     **{f"p{p}": float(np.percentile(v, p)) for p in PERCENTILES}}
-    c, objective = problem.constraints, problem.objective
+    c = problem.constraints
     mu = frame["mu_min_deg"].to_numpy()
     below_angle = ok & (mu < c.min_transmission_angle_deg)
     out["min_transmission_angle_deg"] = c.min_transmission_angle_deg
     out["share_below_min_transmission_angle"] = float(below_angle.mean()) if n else 0.0
     out["share_rejected"] = float((~ok | below_angle).mean()) if n else 0.0
-    if objective.min_ratio > 0:
-        out["min_ratio"] = objective.min_ratio
+    if c.min_ratio > 0:
+        out["min_ratio"] = c.min_ratio
         out["share_below_min_ratio"] = float((ok & (frame["ratio"].to_numpy() <
-                                                    objective.min_ratio)).mean())
-    if objective.max_ripple is not None:
-        out["max_ripple"] = objective.max_ripple
+                                                    c.min_ratio)).mean())
+    if c.max_ripple is not None:
+        out["max_ripple"] = c.max_ripple
         out["share_above_max_ripple"] = float((ok & (frame["delta"].to_numpy() >
-                                                     objective.max_ripple)).mean())
+                                                     c.max_ripple)).mean())
     return out

@@ -92,7 +92,7 @@ def _worse(problem, quantity: str) -> float:
         return 1.0
     if quantity == "transmission_angle":
         return -1.0
-    spec = next(s for s in problem.constraints.quantities if s.key == quantity)
+    spec = next(s for s in problem.quantity_bounds if s.key == quantity)
     return 1.0 if get_quantity(spec.name).worst == "max" else -1.0
 
 
@@ -164,7 +164,7 @@ def worst_case(problem, lengths: Mapping[str, float] | None, tolerances, *,
     figures and the start pool's vectorised figures are computed once for them all; the
     results are the same as without it.
     """
-    bounded = [s.key for s in problem.constraints.quantities]
+    bounded = [s.key for s in problem.quantity_bounds]
     if quantity not in QUANTITIES + tuple(bounded):
         raise ValueError(f"quantity must be one of {', '.join(QUANTITIES + tuple(bounded))} "
                          f"(got {quantity!r})")

@@ -5,6 +5,7 @@ from dataclasses import replace
 import pytest
 
 from optdesign.problem.loader import load_problem
+from optdesign.quantities.bounds import ALIASES
 from optdesign.solver.driver import solve_phase
 from tests.conftest import ROOT
 
@@ -15,10 +16,16 @@ def disc():
     return problem, solve_phase(problem, 6, workers=1)
 
 
+#: the older keys, each a side of a bound on a quantity
+OLDER = {key: side for side, (_, key) in ALIASES.items()}
+
+
 def _delta(problem, **changes):
     own = {k: v for k, v in changes.items() if k in problem.constraints.own}
-    c = replace(problem.constraints, own={**problem.constraints.own, **own},
-                **{k: v for k, v in changes.items() if k not in own})
+    c = replace(problem.constraints, own={**problem.constraints.own, **own})
+    for key, value in changes.items():
+        if key not in own:
+            c = c.with_limit(*OLDER[key], value)
     return solve_phase(replace(problem, constraints=c), 6, workers=1).delta
 
 

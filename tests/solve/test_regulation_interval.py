@@ -65,7 +65,7 @@ def test_a_solve_holds_the_ripple_cap_over_the_whole_interval():
     solver = PhaseSolver(problem, 6)
     result = solve_phase(problem, 6, solver=solver)
     assert result.status == "optimal"
-    cap = problem.objective.max_ripple
+    cap = problem.constraints.max_ripple
     # the worst over the interval, exact and re-checked here, is at the cap and strictly inside
     design = Design.from_problem(problem, result.design)
     worst = worst_over_range(design, problem.stroke, problem.input_speed, "midrange", 0.2, 1.0)

@@ -20,7 +20,7 @@ def disc_problem(phases: int, min_ratio: float, **initial):
     design["phases"] = Variable("phases", value=float(phases))
     for k, v in initial.items():
         design[k] = replace(design[k], initial=v)
-    return replace(p, design=design, objective=replace(p.objective, min_ratio=min_ratio))
+    return replace(p, design=design).with_limit("ratio", "lower", min_ratio or None)
 
 
 def test_basins_keeps_one_seed_per_cluster():

@@ -138,6 +138,11 @@ FEASIBILITY_BATCH = 256
 #: designs a round samples around, and the feasible designs that end the stage early
 ELITES = 16
 ENOUGH_FEASIBLE = 16
+#: the stage stops early where the least violation has stalled: where :data:`STALL_ROUNDS`
+#: rounds lowered it by less than :data:`STALL_GAIN` of itself (a bound beyond the reach of
+#: the box, which the relaxed solve then tells, not a search's slow progress)
+STALL_ROUNDS = 3
+STALL_GAIN = 0.01
 #: least spread of a round's samples around an elite, in the lengths' logarithm (3 %)
 LEAST_SPREAD = 0.03
 #: the lengths relative to the regulated one (the crank) that the stage's first round tries:
@@ -154,11 +159,12 @@ def toward_feasible(problem, count: int, base: dict, free: list, lower, upper, X
     (:data:`RELATIVE`), then rounds sampled log-normally around the :data:`ELITES` least
     violating designs so far, their spread the elites' own, until :data:`ENOUGH_FEASIBLE`
     designs pass (the constraint violation is lowered before the objective is looked at;
-    feasible designs rank first, by their score, Deb's rules). Deterministic: seeded by
-    ``solver.seed``."""
+    feasible designs rank first, by their score, Deb's rules), or until the least violation
+    stalls (:data:`STALL_ROUNDS`). Deterministic: seeded by ``solver.seed``."""
     rng = np.random.default_rng(problem.solver.seed)
     batch = _relative_to_regulated(problem, base, free, lower, upper, rng)
     Xs, scores, violations = [X], [score], [violation]
+    least: list[float] = []         # the least violation after each round
     log_lo, log_hi = np.log(lower), np.log(upper)
     for _ in range(FEASIBILITY_ROUNDS + 1):
         if batch is not None:
@@ -168,6 +174,10 @@ def toward_feasible(problem, count: int, base: dict, free: list, lower, upper, X
             violations.append(v)
         every, v = np.vstack(Xs), np.concatenate(violations)
         if np.sum(v <= 0) >= ENOUGH_FEASIBLE:
+            break
+        least.append(float(np.min(v)))
+        if len(least) > STALL_ROUNDS and 0 < least[-1] and \
+                least[-1] > (1.0 - STALL_GAIN) * least[-1 - STALL_ROUNDS]:
             break
         ranked = np.lexsort((np.where(v <= 0, np.concatenate(scores), v), ~(v <= 0)))
         elites = np.log(every[ranked[:ELITES]][np.isfinite(v[ranked[:ELITES]])])

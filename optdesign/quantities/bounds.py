@@ -44,6 +44,9 @@ class QuantityBound:
     lower: float = -math.inf
     upper: float = math.inf
     at: float | None = None
+    #: held as a bound on the quantity (its NLP rows built: a Pareto axis, a figure read off
+    #: the screening) though every side it bounds is held by an envelope criterion
+    tracked: bool = False
 
     @property
     def key(self) -> str:
@@ -110,8 +113,8 @@ def generic(bounds, apart: frozenset) -> tuple:
             for side in ("lower", "upper"):
                 if (b.name, side) in apart:
                     rest = replace(rest, **{side: -math.inf if side == "lower" else math.inf})
-        if _bounded(rest) or not _bounded(b):
-            out.append(rest)
+        if _bounded(rest) or not _bounded(b) or b.tracked:
+            out.append(replace(rest, tracked=False))
     return tuple(out)
 
 
@@ -125,7 +128,9 @@ def with_generic(bounds, specs, apart: frozenset) -> tuple:
         for side in ("lower", "upper"):
             value = getattr(b, side)
             if (b.name, side) in apart and math.isfinite(value):
-                spec = kept.get(b.key, QuantityBound(b.name))
+                spec = kept.get(b.key)
+                spec = QuantityBound(b.name) if spec is None else \
+                    replace(spec, tracked=spec.tracked or not _bounded(spec))
                 kept[b.key] = replace(spec, **{side: value})
     return ordered(kept.values())
 

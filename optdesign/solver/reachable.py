@@ -67,21 +67,24 @@ def candidates(problem, binding: str | None) -> list[str]:
     return list(dict.fromkeys(n for n in out if n))
 
 
-def relaxed(problem, name: str):
+def relaxed(problem, name: str, side: str | None = None):
     """(the problem with constraint ``name`` dropped and its quantity pushed towards the
-    bound's side as the objective, the figure read off a
+    bound's ``side`` as the objective, the figure read off a
     :class:`~optdesign.quantities.criteria.Measured` design, the figure in words, the side,
-    the file's bound, the unit), or None where the constraint bounds no quantity on one side
-    at its worst. Every other constraint is kept: one that came with the objective (the
-    ripple cap of the largest ratio) becomes a bound of its own."""
+    the file's bound, the unit, the bound's file key), or None where the constraint bounds no
+    quantity at its worst. A band (both sides bounded) is dropped whole and pushed towards the
+    ``side`` given: a band whose upper side the least value reachable lies beyond is out of
+    reach as surely as a cap. Every other constraint is kept: one that came with the
+    objective (the ripple cap of the largest ratio) becomes a bound of its own."""
     criterion = next((c for c in constraints_of(problem) if c.name == name), None)
     spec = criterion.quantity_bound(problem) if criterion is not None else None
-    if spec is None:
+    if spec is None or spec.at is not None:
         return None
     sides = bounded_sides(spec)
-    if spec.at is not None or len(sides) != 1:
+    if side is None and len(sides) == 1:
+        side, = sides
+    if side not in sides:
         return None
-    side, = sides
     quantity = get_quantity(spec.name)
     variant = criterion.without(problem)
     goal = f"-{spec.name}" if side == "lower" else spec.name
@@ -92,9 +95,32 @@ def relaxed(problem, name: str):
     if "max_ripple" in objectives()[goal].requires and variant.constraints.max_ripple is None:
         variant = variant.with_limit("ripple", "upper", LOOSE_RIPPLE)
     bound = spec.lower if side == "lower" else spec.upper
+    key = criterion.key(problem) + (f".{side}" if len(sides) > 1 else "")
     return (variant, lambda m: value_of(problem, spec, m.evaluation),
             quantity.words or spec.name, "largest" if side == "lower" else "least", bound,
-            quantity.unit)
+            quantity.unit, key)
+
+
+def sides_to_relax(problem, name: str, known=()) -> list[str | None]:
+    """The sides of constraint ``name``'s bound to relax, in turn: its one side (None), or
+    a band's two, the side more of the ``known`` designs miss (checked exactly, the first
+    :data:`SIDES_CHECKED`) first, the upper one on a tie."""
+    criterion = next((c for c in constraints_of(problem) if c.name == name), None)
+    spec = criterion.quantity_bound(problem) if criterion is not None else None
+    if spec is None or len(bounded_sides(spec)) != 2:
+        return [None]
+    missed = {"lower": 0, "upper": 0}
+    for design in list(known)[:SIDES_CHECKED]:
+        ver = verify(problem, design)
+        if ver.measured is not None:
+            value = value_of(problem, spec, ver.measured.evaluation)
+            missed["lower"] += value < spec.lower
+            missed["upper"] += value > spec.upper
+    return sorted(("upper", "lower"), key=lambda side: -missed[side])
+
+
+#: known designs checked for the side of a band they miss
+SIDES_CHECKED = 4
 
 
 #: relaxed solves tried at most: each costs a multi-start solve, and one that is infeasible
@@ -121,14 +147,16 @@ def reach_of(problem, count: int, binding: str | None, solve_phase, workers: int
     verified exactly under ``problem``: a verdict never contradicts a design the tool has
     seen."""
     within, tried = None, 0
-    for name in candidates(problem, binding):
-        found = relaxed(problem, name)
+    tries = ((name, side) for name in candidates(problem, binding)
+             for side in sides_to_relax(problem, name, known))
+    for name, band_side in tries:
+        found = relaxed(problem, name, band_side)
         if found is None:
             continue
         if tried == MAX_RELAXED:
             break
         tried += 1
-        variant, read, figure, side, bound, unit = found
+        variant, read, figure, side, bound, unit, key = found
         # a verdict's search: the relaxed problem's best basin first, then (unless the bound
         # lies far beyond it) its next basins, never every start
         reach = None
@@ -140,7 +168,7 @@ def reach_of(problem, count: int, binding: str | None, solve_phase, workers: int
             designs = ([best.design] if best.status == "optimal" else []) + \
                 (list(known) if reach is None else [])
             reach = _nearest(problem, name, designs, read, reach,
-                             (figure, float(bound), side, unit))
+                             (figure, float(bound), side, unit, key))
             if reach is None or not reach.out_of_reach or _far(reach) or \
                     variant.solver.starts <= starts:
                 break
@@ -155,15 +183,14 @@ def reach_of(problem, count: int, binding: str | None, solve_phase, workers: int
 def _nearest(problem, name: str, designs, read, reach: Reach | None, what) -> Reach | None:
     """The nearest to the bound of ``reach`` and ``designs`` that meet every constraint but
     ``name``, each verified exactly under ``problem``."""
-    figure, bound, side, unit = what
+    figure, bound, side, unit, key = what
     for design in designs:
         ver = verify(problem, design)
         if ver.measured is None or set(ver.violations) - {name}:
             continue
         value = float(read(ver.measured))
         if reach is None or (value > reach.value if side == "largest" else value < reach.value):
-            reach = Reach(name, figure, bound, value, side, unit, _key_of(problem, name),
-                          dict(design))
+            reach = Reach(name, figure, bound, value, side, unit, key, dict(design))
     return reach
 
 
@@ -171,8 +198,3 @@ def _far(reach: Reach) -> bool:
     """Whether ``reach``'s bound lies :data:`FAR_BEYOND` its value."""
     return abs(reach.bound - reach.value) > FAR_BEYOND * max(abs(reach.bound),
                                                              abs(reach.value))
-
-
-def _key_of(problem, name: str) -> str:
-    """The problem file's key of constraint ``name``, as the user wrote it."""
-    return next((c.key(problem) for c in constraints_of(problem) if c.name == name), name)

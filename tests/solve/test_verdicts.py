@@ -8,6 +8,7 @@ import copy
 import pickle
 import warnings
 
+import numpy as np
 import pytest
 import yaml
 
@@ -170,3 +171,26 @@ def test_the_largest_peak_speed_is_not_left_where_a_polish_ran_out_of_iterations
     result = solve(problem)
     _checked(problem, result)
     assert result.design["r1"] == pytest.approx(49.95, rel=1e-6)
+
+
+def test_a_band_out_of_reach_is_infeasible_with_the_side_it_misses():
+    """A slotted lever held to a swing band and a ripple band (the oracle's draw 73, which
+    ended failed): the swing band's lower side lies beyond the widest swing any pivot distance
+    gives within the ripple band. The verdict names that side and the reachable swing, and
+    no pivot distance of a fine sweep of the line beats it."""
+    data = {"mechanism": "slotted_lever", "input_speed": 0.628, "stroke": "both",
+            "design": {"XD": {"lower": 74.074, "upper": 722.86}, "L": 74, "sections": 5},
+            "constraints": {"ripple": {"lower": 0.14116, "upper": 0.20484},
+                            "swing": {"lower": 26.406, "upper": 140.26}}}
+    problem = problem_from_dict(data, where="band.yaml")
+    result = solve(problem)
+    assert result.status == "infeasible", result.message
+    assert "constraints.swing.lower" in result.message
+    reach = result.per_phase[0].reachable
+    swings = []
+    for xd in np.geomspace(74.074, 722.86, 97):
+        ver = verify(problem, {**problem.start_values(), "XD": float(xd)})
+        assert not ver.feasible
+        if ver.measured is not None and set(ver.violations) <= {"swing"}:
+            swings.append(ver.measured.quantities["swing"])
+    assert swings and max(swings) <= reach["value"] * (1 + 1e-6)

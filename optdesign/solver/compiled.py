@@ -15,8 +15,9 @@ minutes per NLP, so it happens once, and never while a command waits:
   checksum of the bytes before it: a corrupt, foreign or stale file is ignored (and built
   anew), never mapped;
 * a solve that finds none runs on the virtual machine, as without a compiler, and starts the
-  build beside it: a detached, niced process, one per digest (a lock file); the next solve of
-  the same NLP loads the library. A build that fails leaves a note in the folder, read out
+  build beside it: a detached, niced process, one per digest (a lock file) and one at a time
+  per cache folder (:data:`MAX_DETACHED_BUILDS`); the next solve of the same NLP loads the
+  library. A build that fails leaves a note in the folder, read out
   under ``--debug``, and is tried again after :data:`RETRY_AFTER_S` or by ``optdesign
   warm-up``, which builds a problem's libraries ahead of time (:func:`warm_up`).
 
@@ -58,6 +59,11 @@ LOCK_STALE_S = 3600.0
 RETRY_AFTER_S = 86400.0
 #: the niceness of a build started beside a solve
 NICE = 10
+#: builds started beside solves that run at once, per cache folder: a compiler takes 1-2.5 GB
+#: and a core for minutes, and a run of many distinct problems (an oracle, a script over
+#: files) would otherwise start one per problem; a solve that finds the slot taken starts
+#: none, and a later solve of its NLP starts it
+MAX_DETACHED_BUILDS = 1
 
 log = logging.getLogger("optdesign.compiled")
 
@@ -217,6 +223,15 @@ def building(where: Path, name: str) -> bool:
     return True
 
 
+def builds_under_way(where: Path) -> int:
+    """How many builds run in ``where`` (:func:`building`, by their lock files)."""
+    try:
+        names = [lock.name[:-len(".lock")] for lock in where.glob("*.lock")]
+    except OSError:
+        return 0
+    return sum(building(where, name) for name in names)
+
+
 def _failed_recently(where: Path, name: str) -> str | None:
     """The note of a build of ``name`` that failed less than :data:`RETRY_AFTER_S` ago."""
     note = where / f"{name}.failed"
@@ -242,6 +257,10 @@ def start(rec: Recipe, where: Path, detached: bool = True,
     if failed is not None:
         log.debug("an earlier build of %s failed (%s); `optdesign warm-up` tries again",
                   where / f"{rec.name}.so", failed)
+        return None
+    if detached and builds_under_way(where) >= MAX_DETACHED_BUILDS:
+        log.debug("a build is under way in %s: %s is built by a later solve or `optdesign "
+                  "warm-up`", where, where / f"{rec.name}.so")
         return None
     if not _lock(where, rec.name):
         return None

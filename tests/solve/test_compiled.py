@@ -199,6 +199,22 @@ def test_a_failed_build_is_noted_and_not_started_again(tmp_path, monkeypatch, ca
     assert "an earlier build" in caplog.text
 
 
+def test_one_build_beside_solves_at_a_time(tmp_path, monkeypatch, caplog):
+    """A build of another NLP under way (its lock names a running process): a solve starts
+    none of its own, so a run over many distinct problems never starts a compiler each."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    rec = recipe_of(problem_from_dict(vergov_data()))
+    where = compiled.folder()
+    (where / "another-nlp.lock").write_text(str(os.getpid()))
+    assert compiled.builds_under_way(where) == 1
+    with caplog.at_level(logging.DEBUG, logger="optdesign.compiled"):
+        assert compiled.start(rec, where) is None
+    assert "a build is under way" in caplog.text
+    assert not (where / f"{rec.name}.lock").exists()
+    (where / "another-nlp.lock").write_text("999999999")        # its process has ended
+    assert compiled.builds_under_way(where) == 0
+
+
 def test_warm_up_prints_where_the_libraries_are(cache, capsys, write_problem):
     where, problem, rec, path = cache
     code, out = run_main(["warm-up", write_problem(vergov_data())])

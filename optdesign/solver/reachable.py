@@ -101,26 +101,44 @@ def relaxed(problem, name: str, side: str | None = None):
             quantity.unit, key)
 
 
-def sides_to_relax(problem, name: str, known=()) -> list[str | None]:
+def sides_to_relax(problem, name: str, checked=()) -> list[str | None]:
     """The sides of constraint ``name``'s bound to relax, in turn: its one side (None), or
-    a band's two, the side more of the ``known`` designs miss (checked exactly, the first
-    :data:`SIDES_CHECKED`) first, the upper one on a tie."""
+    a band's two, the side more of the ``checked`` designs (verifications) miss first, the
+    upper one on a tie."""
     criterion = next((c for c in constraints_of(problem) if c.name == name), None)
     spec = criterion.quantity_bound(problem) if criterion is not None else None
     if spec is None or len(bounded_sides(spec)) != 2:
         return [None]
     missed = {"lower": 0, "upper": 0}
-    for design in list(known)[:SIDES_CHECKED]:
-        ver = verify(problem, design)
-        if ver.measured is not None:
-            value = value_of(problem, spec, ver.measured.evaluation)
-            missed["lower"] += value < spec.lower
-            missed["upper"] += value > spec.upper
+    for ver in checked:
+        value = value_of(problem, spec, ver.measured.evaluation)
+        missed["lower"] += value < spec.lower
+        missed["upper"] += value > spec.upper
     return sorted(("upper", "lower"), key=lambda side: -missed[side])
 
 
-#: known designs checked for the side of a band they miss
-SIDES_CHECKED = 4
+def checked_designs(problem, known) -> list:
+    """The exact checks of the first of ``known`` (the user's design) and of its last
+    :data:`KNOWN_CHECKED` - 1 (where the polishes ended), those that assemble."""
+    designs = list(known)
+    picks = designs[:1] + designs[1:][-(KNOWN_CHECKED - 1):]
+    return [ver for ver in (verify(problem, d) for d in picks) if ver.measured is not None]
+
+
+def ranked_candidates(problem, binding: str | None, checked) -> list[str]:
+    """:func:`candidates`, those more of the ``checked`` designs break first (IPOPT's
+    binding constraint first among equals): the bound the designs the solve has seen miss is
+    the one to relax, where IPOPT's last word may name another."""
+    missed = {}
+    for ver in checked:
+        for name in ver.violations:
+            missed[name] = missed.get(name, 0) + 1
+    return sorted(candidates(problem, binding), key=lambda name: -missed.get(name, 0))
+
+
+#: known designs checked for the bounds they break: the user's and where the last polishes
+#: ended
+KNOWN_CHECKED = 6
 
 
 #: relaxed solves tried at most: each costs a multi-start solve, and one that is infeasible
@@ -137,7 +155,7 @@ FAR_BEYOND = 0.25
 
 def reach_of(problem, count: int, binding: str | None, solve_phase, workers: int = 1,
              known=()) -> Reach | None:
-    """The first of :func:`candidates` whose nearest reachable value lies beyond its bound
+    """The first of :func:`ranked_candidates` whose nearest reachable value lies beyond its bound
     (``solve_phase`` solves each relaxed problem, without asking this again; at most
     :data:`MAX_RELAXED` of them); else the first one's within its bound (a design exists:
     it meets every constraint, and the solve polishes from it); None where none can be told.
@@ -147,8 +165,9 @@ def reach_of(problem, count: int, binding: str | None, solve_phase, workers: int
     verified exactly under ``problem``: a verdict never contradicts a design the tool has
     seen."""
     within, tried = None, 0
-    tries = ((name, side) for name in candidates(problem, binding)
-             for side in sides_to_relax(problem, name, known))
+    checked = checked_designs(problem, known)
+    tries = ((name, side) for name in ranked_candidates(problem, binding, checked)
+             for side in sides_to_relax(problem, name, checked))
     for name, band_side in tries:
         found = relaxed(problem, name, band_side)
         if found is None:

@@ -194,3 +194,24 @@ def test_a_band_out_of_reach_is_infeasible_with_the_side_it_misses():
         if ver.measured is not None and set(ver.violations) <= {"swing"}:
             swings.append(ver.measured.quantities["swing"])
     assert swings and max(swings) <= reach["value"] * (1 + 1e-6)
+
+
+def test_the_bound_the_seen_designs_break_is_relaxed_first():
+    """A pulse reducer with three freewheels, whose δ is 2/3 at every crank radius, held to a
+    δ of at least 0.666736 and a band of peak speeds (the oracle's draw 58, which ended
+    failed): IPOPT names no bound, the band is relaxed first by the order of the bounds, and
+    two relaxed solves were spent on it. The designs the polishes ended at break the ripple's
+    floor alone, so that is relaxed first, and the verdict names it."""
+    data = {"mechanism": "pulse_reducer", "input_speed": 97.0,
+            "design": {"r1": {"lower": 0.04939, "upper": 49.95}, "a": 50, "R1": 250,
+                       "freewheels": 3},
+            "constraints": {"peak_speed": {"lower": 0.25345, "upper": 1.96096},
+                            "ripple": {"lower": 0.666736}},
+            "objective": {"minimize": "peak_speed"}}
+    with warnings.catch_warnings():            # r1 under 1 mm: meant so
+        warnings.simplefilter("ignore")
+        problem = problem_from_dict(data, where="floor.yaml")
+    result = solve(problem)
+    assert result.status == "infeasible", result.message
+    assert "constraints.ripple.lower" in result.message
+    assert result.per_phase[0].reachable["value"] == pytest.approx(2 / 3, rel=1e-6)

@@ -55,10 +55,12 @@ class Page:
 
     # ----------------------------------------------------------------- widgets
     def _build_widgets(self) -> None:
+        from optdesign.explorer.widgets import PromptSlider
+
         pn, s = self.pn, self.session
         self.lengths = {}
         for name, lower, upper in s.lengths():
-            w = pn.widgets.EditableFloatSlider(
+            w = PromptSlider(
                 name=f"{name} [mm]", start=lower, end=upper, fixed_start=lower,
                 fixed_end=upper, value=round(float(s.values[name]), 4),
                 step=_step(upper - lower),
@@ -76,7 +78,7 @@ class Page:
         else:
             self.count = pn.widgets.StaticText(name=key, value=f"{counts[0]} (fixed by the "
                                                                f"file)")
-        self.eccentricity = pn.widgets.EditableFloatSlider(
+        self.eccentricity = PromptSlider(
             name="drawn at eccentricity e", start=0.05, end=1.0, fixed_end=1.0, step=0.01,
             value=1.0, width=CONTROLS_WIDTH - 20, css_classes=["explore-eccentricity"])
         self.eccentricity.param.watch(lambda e: self._act(s.set_eccentricity, e.new),
@@ -84,7 +86,7 @@ class Page:
         self.bounds = {}
         for b in s.bounds():
             unit = "" if b.unit in ("", "-") else f" [{b.unit}]"
-            w = pn.widgets.EditableFloatSlider(
+            w = PromptSlider(
                 name=f"{b.label}{unit}", start=b.lower, end=b.upper,
                 value=float(b.value), step=b.step, width=CONTROLS_WIDTH - 20,
                 css_classes=[f"explore-bound-{b.key.replace('.', '-')}"])

@@ -123,12 +123,13 @@ class Page:
         self.links = ColumnDataSource(dict(x0=[], y0=[], x1=[], y1=[], colour=[], width=[]),
                                       name="explore-links")
         self.joints = ColumnDataSource(dict(x=[], y=[], name=[]), name="explore-joints")
-        self.paths = ColumnDataSource(dict(xs=[], ys=[]), name="explore-paths")
+        # every joint's path in one line, the paths apart by a NaN: two arrays to send
+        self.paths = ColumnDataSource(dict(x=[], y=[]), name="explore-paths")
         # a square frame and equal spans: the drawing is to scale
         fig = figure(frame_width=430, frame_height=430, x_range=Range1d(-1, 1),
                      y_range=Range1d(-1, 1), title="the linkage to scale [mm]",
                      tools="pan,wheel_zoom,reset", name="explore-linkage")
-        fig.multi_line("xs", "ys", source=self.paths, color="#bbbbbb", line_width=1)
+        fig.line("x", "y", source=self.paths, color="#bbbbbb", line_width=1)
         fig.segment("x0", "y0", "x1", "y1", source=self.links, color="colour",
                     line_width="width")
         fig.scatter("x", "y", source=self.joints, size=6, color="white", line_color="black")
@@ -308,7 +309,9 @@ class Page:
                 source.data = {k: [] for k in source.data}
             return
         t = shot.turn
-        deg = np.append(t.phi_deg, 360.0)
+        # the crank angles as a list (sent as text, a few bytes each); the speeds as arrays
+        # (sent as binary): every array is a message of its own to the page
+        deg = np.append(t.phi_deg, 360.0).tolist()
         self.members.data = dict(
             xs=[deg] * len(t.speeds), ys=[np.append(v, v[0]) for v in t.speeds],
             colour=[MEMBER_COLOURS[k % len(MEMBER_COLOURS)] for k in range(len(t.speeds))])
@@ -318,8 +321,9 @@ class Page:
             colour=[OUTPUT_COLOURS[i % len(OUTPUT_COLOURS)] for i in range(len(shown))],
             label=[label for label, _ in shown])
         joints = t.positions.reshape(-1, 2)
-        self.paths.data = dict(xs=[t.positions[:, j, 0] for j in range(len(t.names))],
-                               ys=[t.positions[:, j, 1] for j in range(len(t.names))])
+        gap = np.full((1, len(t.names), 2), np.nan)             # (frames + 1, joints, 2)
+        paths = np.concatenate([t.positions, gap]).transpose(1, 0, 2).reshape(-1, 2)
+        self.paths.data = dict(x=paths[:, 0], y=paths[:, 1])
         lo, hi = np.nanmin(joints, axis=0), np.nanmax(joints, axis=0)
         half = 0.55 * max(hi - lo) or 1.0
         centre = (lo + hi) / 2
@@ -339,10 +343,12 @@ class Page:
         a = [at[index[link[0]]] for link in t.links]
         b = [at[index[link[1]]] for link in t.links]
         a, b = np.array(a), np.array(b)
-        self.links.data = dict(x0=a[:, 0], y0=a[:, 1], x1=b[:, 0], y1=b[:, 1],
+        # a few numbers each: lists, in the message's text
+        self.links.data = dict(x0=a[:, 0].tolist(), y0=a[:, 1].tolist(), x1=b[:, 0].tolist(),
+                               y1=b[:, 1].tolist(),
                                colour=[ROLE_COLOURS[link[2]] for link in t.links],
                                width=[ROLE_WIDTHS[link[2]] for link in t.links])
-        self.joints.data = dict(x=at[:, 0], y=at[:, 1], name=list(t.names))
+        self.joints.data = dict(x=at[:, 0].tolist(), y=at[:, 1].tolist(), name=list(t.names))
         self.cursor.location = float(t.phi_deg[frame])
 
 

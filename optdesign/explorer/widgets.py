@@ -11,7 +11,8 @@ One thing it waits for: the server's acknowledgement of the move (a message of t
 frames, each frame one turn of the loop) still being written to the page. Panel sends a
 callback's changes at once only when no message is half-written to the page's socket, else
 it tries again every 10 ms; so the callbacks start once the socket is free, and the page's
-update leaves the server as soon as they end.
+update leaves the server as soon as they end, in one message (the slider's number field
+with the redraw).
 
 Importing this module imports Panel.
 """
@@ -28,8 +29,12 @@ class _PromptFloatSlider(FloatSlider):
     _debounce = 0
 
     async def _change_coroutine(self, doc, event_id=None) -> None:
+        from panel.io import hold
+        from panel.io.state import set_curdoc
+
         await sockets_free(doc)
-        await super()._change_coroutine(doc, event_id)
+        with set_curdoc(doc), hold(doc):        # every change of the move in one message
+            await super()._change_coroutine(doc, event_id)
 
 
 class PromptSlider(EditableFloatSlider):

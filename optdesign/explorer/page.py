@@ -141,7 +141,8 @@ class Page:
                                         name="explore-outputs")
         sp = figure(width=560, height=340, title="driving speed of each rocker, and the "
                     "output speed at each listed e", tools="pan,wheel_zoom,reset,hover",
-                    tooltips=[("", "@label")], x_range=(0, 360), name="explore-speeds")
+                    tooltips=[("", "@label")], x_range=(0, 360), y_range=Range1d(-1, 1),
+                    name="explore-speeds")         # y: the curves' span, set on each redraw
         sp.multi_line("xs", "ys", source=self.members, color="colour", line_width=1,
                       alpha=0.7)
         outputs = sp.multi_line("xs", "ys", source=self.outputs, color="colour",
@@ -320,6 +321,11 @@ class Page:
             xs=[deg] * len(shown), ys=[np.append(v, v[0]) for _, v in shown],
             colour=[OUTPUT_COLOURS[i % len(OUTPUT_COLOURS)] for i in range(len(shown))],
             label=[label for label, _ in shown])
+        # the speeds' span set here, as the page would fit it (5 % margins), so the page
+        # neither fits it nor sends the fitted span back
+        curves = np.concatenate([t.speeds.ravel(), *(v for _, v in shown)])
+        low, high = float(np.nanmin(curves)), float(np.nanmax(curves))
+        _span(self.speeds_figure.y_range, low, high, 0.05 * (high - low) or 1.0)
         joints = t.positions.reshape(-1, 2)
         gap = np.full((1, len(t.names), 2), np.nan)             # (frames + 1, joints, 2)
         paths = np.concatenate([t.positions, gap]).transpose(1, 0, 2).reshape(-1, 2)
@@ -328,8 +334,8 @@ class Page:
         half = 0.55 * max(hi - lo) or 1.0
         centre = (lo + hi) / 2
         fig = self.linkage_figure
-        fig.x_range.start, fig.x_range.end = centre[0] - half, centre[0] + half
-        fig.y_range.start, fig.y_range.end = centre[1] - half, centre[1] + half
+        _span(fig.x_range, centre[0], centre[0], half)
+        _span(fig.y_range, centre[1], centre[1], half)
         self._draw_frame()
 
     def _draw_frame(self) -> None:
@@ -356,6 +362,13 @@ def _internal(exc: Exception) -> str:
     """The page's line for a fault that is a bug, as the command line words it."""
     return (f"internal error ({type(exc).__name__}: {str(exc)[:200]}); please report it with "
             f"the problem file")
+
+
+def _span(axis, low: float, high: float, margin: float) -> None:
+    """Show [low - margin, high + margin] on the Range1d ``axis``, and go back to it on the
+    plot's reset."""
+    axis.start = axis.reset_start = float(low - margin)
+    axis.end = axis.reset_end = float(high + margin)
 
 
 def _step(span: float) -> float:

@@ -43,14 +43,27 @@ class PromptSlider(EditableFloatSlider):
     _slider_widget = _PromptFloatSlider
 
 
+#: the longest wait for a page's socket [s]: a page that stops reading holds a message
+#: half-written, and the move is then answered anyway (Panel sends it when it can)
+LONGEST_WAIT = 0.25
+
+
 async def sockets_free(doc) -> None:
     """Return once no message is being written to a page showing ``doc`` (each page's
-    socket holds its write lock while a message's frames go out); at once outside a
-    server."""
+    socket holds its write lock while a message's frames go out), or after
+    :data:`LONGEST_WAIT`; at once outside a server."""
+    from datetime import timedelta
+
+    from tornado.util import TimeoutError as Timeout
+
     context = getattr(doc, "session_context", None)
     session = getattr(context, "session", None)
     for connection in list(getattr(session, "_subscribed_connections", ())):
         lock = getattr(getattr(connection, "_socket", None), "write_lock", None)
-        if lock is not None:
-            with await lock.acquire():
+        if lock is None:
+            continue
+        try:
+            with await lock.acquire(timeout=timedelta(seconds=LONGEST_WAIT)):
                 pass
+        except Timeout:
+            return

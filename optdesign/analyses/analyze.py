@@ -137,11 +137,14 @@ def transmission_angles(design: Design, eccentricity: float = 1.0,
     return design.transmission_angles(eccentricity, n_grid)
 
 
-def analyze(problem, values: dict | None = None) -> AnalysisResult:
+def analyze(problem, values: dict | None = None, every_stroke: bool = True) -> AnalysisResult:
     """Exact figures of the problem's design (fixed and initial values) or of ``values``.
 
     A design that does not assemble at some eccentricity comes back with ``assembles`` false
     and a ``failure`` naming the chain and the crank angle; nothing is computed past it.
+    ``every_stroke`` False evaluates the speed figures (``strokes``, ``regulation``) of the
+    problem's stroke alone, as the explorer shows them; δ, the quantities and the
+    constraints are the problem's stroke's either way, the same figures.
     """
     design = Design.from_problem(problem, values)
     mech = design.model
@@ -153,7 +156,8 @@ def analyze(problem, values: dict | None = None) -> AnalysisResult:
     result.count_variable = mech.count_variable
     result.eccentricity_range = problem.eccentricity_range
     eccentricities = sorted(set(problem.eccentricities) | {1.0}, reverse=True)
-    ev = evaluate(design, problem.stroke, problem.input_speed, eccentricities, mech.strokes)
+    ev = evaluate(design, problem.stroke, problem.input_speed, eccentricities,
+                  mech.strokes if every_stroke else (problem.stroke,))
     if isinstance(ev.failure, ProblemError):
         raise ev.failure
     if ev.failure is None and problem.eccentricity_range is not None:

@@ -55,10 +55,12 @@ class Page:
 
     # ----------------------------------------------------------------- widgets
     def _build_widgets(self) -> None:
+        from optdesign.explorer.widgets import PromptSlider
+
         pn, s = self.pn, self.session
         self.lengths = {}
         for name, lower, upper in s.lengths():
-            w = pn.widgets.EditableFloatSlider(
+            w = PromptSlider(
                 name=f"{name} [mm]", start=lower, end=upper, fixed_start=lower,
                 fixed_end=upper, value=round(float(s.values[name]), 4),
                 step=_step(upper - lower),
@@ -76,7 +78,7 @@ class Page:
         else:
             self.count = pn.widgets.StaticText(name=key, value=f"{counts[0]} (fixed by the "
                                                                f"file)")
-        self.eccentricity = pn.widgets.EditableFloatSlider(
+        self.eccentricity = PromptSlider(
             name="drawn at eccentricity e", start=0.05, end=1.0, fixed_end=1.0, step=0.01,
             value=1.0, width=CONTROLS_WIDTH - 20, css_classes=["explore-eccentricity"])
         self.eccentricity.param.watch(lambda e: self._act(s.set_eccentricity, e.new),
@@ -84,7 +86,7 @@ class Page:
         self.bounds = {}
         for b in s.bounds():
             unit = "" if b.unit in ("", "-") else f" [{b.unit}]"
-            w = pn.widgets.EditableFloatSlider(
+            w = PromptSlider(
                 name=f"{b.label}{unit}", start=b.lower, end=b.upper,
                 value=float(b.value), step=b.step, width=CONTROLS_WIDTH - 20,
                 css_classes=[f"explore-bound-{b.key.replace('.', '-')}"])
@@ -121,12 +123,13 @@ class Page:
         self.links = ColumnDataSource(dict(x0=[], y0=[], x1=[], y1=[], colour=[], width=[]),
                                       name="explore-links")
         self.joints = ColumnDataSource(dict(x=[], y=[], name=[]), name="explore-joints")
-        self.paths = ColumnDataSource(dict(xs=[], ys=[]), name="explore-paths")
+        # every joint's path in one line, the paths apart by a NaN: two arrays to send
+        self.paths = ColumnDataSource(dict(x=[], y=[]), name="explore-paths")
         # a square frame and equal spans: the drawing is to scale
         fig = figure(frame_width=430, frame_height=430, x_range=Range1d(-1, 1),
                      y_range=Range1d(-1, 1), title="the linkage to scale [mm]",
                      tools="pan,wheel_zoom,reset", name="explore-linkage")
-        fig.multi_line("xs", "ys", source=self.paths, color="#bbbbbb", line_width=1)
+        fig.line("x", "y", source=self.paths, color="#bbbbbb", line_width=1)
         fig.segment("x0", "y0", "x1", "y1", source=self.links, color="colour",
                     line_width="width")
         fig.scatter("x", "y", source=self.joints, size=6, color="white", line_color="black")
@@ -138,7 +141,8 @@ class Page:
                                         name="explore-outputs")
         sp = figure(width=560, height=340, title="driving speed of each rocker, and the "
                     "output speed at each listed e", tools="pan,wheel_zoom,reset,hover",
-                    tooltips=[("", "@label")], x_range=(0, 360), name="explore-speeds")
+                    tooltips=[("", "@label")], x_range=(0, 360), y_range=Range1d(-1, 1),
+                    name="explore-speeds")         # y: the curves' span, set on each redraw
         sp.multi_line("xs", "ys", source=self.members, color="colour", line_width=1,
                       alpha=0.7)
         outputs = sp.multi_line("xs", "ys", source=self.outputs, color="colour",
@@ -306,7 +310,9 @@ class Page:
                 source.data = {k: [] for k in source.data}
             return
         t = shot.turn
-        deg = np.append(t.phi_deg, 360.0)
+        # the crank angles as a list (sent as text, a few bytes each); the speeds as arrays
+        # (sent as binary): every array is a message of its own to the page
+        deg = np.append(t.phi_deg, 360.0).tolist()
         self.members.data = dict(
             xs=[deg] * len(t.speeds), ys=[np.append(v, v[0]) for v in t.speeds],
             colour=[MEMBER_COLOURS[k % len(MEMBER_COLOURS)] for k in range(len(t.speeds))])
@@ -315,15 +321,21 @@ class Page:
             xs=[deg] * len(shown), ys=[np.append(v, v[0]) for _, v in shown],
             colour=[OUTPUT_COLOURS[i % len(OUTPUT_COLOURS)] for i in range(len(shown))],
             label=[label for label, _ in shown])
+        # the speeds' span set here, as the page would fit it (5 % margins), so the page
+        # neither fits it nor sends the fitted span back
+        curves = np.concatenate([t.speeds.ravel(), *(v for _, v in shown)])
+        low, high = float(np.nanmin(curves)), float(np.nanmax(curves))
+        _span(self.speeds_figure.y_range, low, high, 0.05 * (high - low) or 1.0)
         joints = t.positions.reshape(-1, 2)
-        self.paths.data = dict(xs=[t.positions[:, j, 0] for j in range(len(t.names))],
-                               ys=[t.positions[:, j, 1] for j in range(len(t.names))])
+        gap = np.full((1, len(t.names), 2), np.nan)             # (frames + 1, joints, 2)
+        paths = np.concatenate([t.positions, gap]).transpose(1, 0, 2).reshape(-1, 2)
+        self.paths.data = dict(x=paths[:, 0], y=paths[:, 1])
         lo, hi = np.nanmin(joints, axis=0), np.nanmax(joints, axis=0)
         half = 0.55 * max(hi - lo) or 1.0
         centre = (lo + hi) / 2
         fig = self.linkage_figure
-        fig.x_range.start, fig.x_range.end = centre[0] - half, centre[0] + half
-        fig.y_range.start, fig.y_range.end = centre[1] - half, centre[1] + half
+        _span(fig.x_range, centre[0], centre[0], half)
+        _span(fig.y_range, centre[1], centre[1], half)
         self._draw_frame()
 
     def _draw_frame(self) -> None:
@@ -337,10 +349,12 @@ class Page:
         a = [at[index[link[0]]] for link in t.links]
         b = [at[index[link[1]]] for link in t.links]
         a, b = np.array(a), np.array(b)
-        self.links.data = dict(x0=a[:, 0], y0=a[:, 1], x1=b[:, 0], y1=b[:, 1],
+        # a few numbers each: lists, in the message's text
+        self.links.data = dict(x0=a[:, 0].tolist(), y0=a[:, 1].tolist(), x1=b[:, 0].tolist(),
+                               y1=b[:, 1].tolist(),
                                colour=[ROLE_COLOURS[link[2]] for link in t.links],
                                width=[ROLE_WIDTHS[link[2]] for link in t.links])
-        self.joints.data = dict(x=at[:, 0], y=at[:, 1], name=list(t.names))
+        self.joints.data = dict(x=at[:, 0].tolist(), y=at[:, 1].tolist(), name=list(t.names))
         self.cursor.location = float(t.phi_deg[frame])
 
 
@@ -348,6 +362,13 @@ def _internal(exc: Exception) -> str:
     """The page's line for a fault that is a bug, as the command line words it."""
     return (f"internal error ({type(exc).__name__}: {str(exc)[:200]}); please report it with "
             f"the problem file")
+
+
+def _span(axis, low: float, high: float, margin: float) -> None:
+    """Show [low - margin, high + margin] on the Range1d ``axis``, and go back to it on the
+    plot's reset."""
+    axis.start = axis.reset_start = float(low - margin)
+    axis.end = axis.reset_end = float(high + margin)
 
 
 def _step(span: float) -> float:

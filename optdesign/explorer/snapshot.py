@@ -2,7 +2,8 @@
 
 Every slider move evaluates the design exactly, as ``optdesign analyze`` does
 (:func:`optdesign.analyses.analyze.analyze`: δ named as ``solve`` names it, the ratio, the
-least transmission angle, every quantity and every constraint's margin), and samples its
+least transmission angle, every quantity and every constraint's margin; the speed figures of
+the problem's stroke alone, the only stroke the page shows), and samples its
 turn at the drawn eccentricity (:func:`optdesign.export.animation.turn`: the joints, each
 rocker's speed, and the output speed at each listed eccentricity, labelled with its δ), as
 ``optdesign animate`` draws it. Nothing is estimated from a sample.
@@ -92,7 +93,7 @@ def snapshot(problem, values: dict, eccentricity: float = 1.0,
     from optdesign.export.animation import turn
 
     try:
-        result = analyze(problem, values)
+        result = analyze(problem, values, every_stroke=False)    # the page shows one stroke
     except ProblemError as exc:          # values the mechanism refuses (l1 >= l0)
         return Snapshot(dict(values), eccentricity, None, None, _plain(exc))
     if not result.assembles:

@@ -56,6 +56,12 @@ def test_each_move_is_the_exact_evaluators_figures(session):
     assert shot.delta_text == exact.ripples().worst.text(6) == \
         "δ (midrange, worst over e = 1) = " + f"{exact.ripples().worst.value:.6f}"
     assert shot.ratio == exact.quantities["values"]["ratio"]
+    # the page evaluates the problem's stroke alone: every figure it shows is analyze's
+    assert shot.analysis.quantities == exact.quantities
+    assert shot.analysis.constraints == exact.constraints
+    assert shot.analysis.min_transmission_angle_deg == exact.min_transmission_angle_deg
+    assert shot.analysis.strokes["forward"] == exact.strokes["forward"]
+    assert list(shot.analysis.strokes) == ["forward"] and "reverse" in exact.strokes
     names = [r.name for r in shot.rows()]
     assert "margin of pin_radius" in names and "housing_radius" in names
     # the drawing at crank angle 0 is the mechanism's joints there

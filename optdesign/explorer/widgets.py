@@ -1,0 +1,69 @@
+"""The explorer's slider: Panel's editable float slider, answered as soon as it moves.
+
+Panel waits 50 ms after a slider's value arrives from the browser before it runs the
+widget's callbacks (its ``_debounce``: changes arriving meanwhile are merged into one). On
+the explorer's page that wait was a third of a move's round trip, and it merges nothing the
+server would not merge anyway: while a move is being evaluated, the values that arrive are
+merged into one change, and the next evaluation takes the newest. :class:`PromptSlider` runs
+its callbacks on the next turn of the server's loop instead.
+
+One thing it waits for: the server's acknowledgement of the move (a message of three
+frames, each frame one turn of the loop) still being written to the page. Panel sends a
+callback's changes at once only when no message is half-written to the page's socket, else
+it tries again every 10 ms; so the callbacks start once the socket is free, and the page's
+update leaves the server as soon as they end, in one message (the slider's number field
+with the redraw).
+
+Importing this module imports Panel.
+"""
+from __future__ import annotations
+
+from panel.widgets import EditableFloatSlider, FloatSlider
+
+
+class _PromptFloatSlider(FloatSlider):
+    """The slider part of :class:`PromptSlider`: a value from the browser is processed on
+    the next turn of the loop (no 50 ms wait), once no message is half-written to the
+    page."""
+
+    _debounce = 0
+
+    async def _change_coroutine(self, doc, event_id=None) -> None:
+        from panel.io import hold
+        from panel.io.state import set_curdoc
+
+        await sockets_free(doc)
+        with set_curdoc(doc), hold(doc):        # every change of the move in one message
+            await super()._change_coroutine(doc, event_id)
+
+
+class PromptSlider(EditableFloatSlider):
+    """An :class:`~panel.widgets.EditableFloatSlider` whose moves are answered at once."""
+
+    _slider_widget = _PromptFloatSlider
+
+
+#: the longest wait for a page's socket [s]: a page that stops reading holds a message
+#: half-written, and the move is then answered anyway (Panel sends it when it can)
+LONGEST_WAIT = 0.25
+
+
+async def sockets_free(doc) -> None:
+    """Return once no message is being written to a page showing ``doc`` (each page's
+    socket holds its write lock while a message's frames go out), or after
+    :data:`LONGEST_WAIT`; at once outside a server."""
+    from datetime import timedelta
+
+    from tornado.util import TimeoutError as Timeout
+
+    context = getattr(doc, "session_context", None)
+    session = getattr(context, "session", None)
+    for connection in list(getattr(session, "_subscribed_connections", ())):
+        lock = getattr(getattr(connection, "_socket", None), "write_lock", None)
+        if lock is None:
+            continue
+        try:
+            with await lock.acquire(timeout=timedelta(seconds=LONGEST_WAIT)):
+                pass
+        except Timeout:
+            return

@@ -1,0 +1,62 @@
+"""The explorer's slider: answered without Panel's wait, once the page's socket is free (the
+browser test drives it through a real server; these check the parts alone)."""
+import asyncio
+from types import SimpleNamespace
+
+import pytest
+
+pytest.importorskip("panel")
+
+from optdesign.explorer import widgets  # noqa: E402
+from optdesign.explorer.widgets import PromptSlider, sockets_free  # noqa: E402
+
+
+def _page_showing(lock) -> SimpleNamespace:
+    """A document whose one page's socket has ``lock`` as its write lock, as Bokeh's
+    server session holds its connections."""
+    connection = SimpleNamespace(_socket=SimpleNamespace(write_lock=lock))
+    session = SimpleNamespace(_subscribed_connections=[connection])
+    return SimpleNamespace(session_context=SimpleNamespace(session=session))
+
+
+def test_the_slider_is_panels_editable_slider_without_its_wait():
+    w = PromptSlider(start=20, end=150, value=56.0, step=0.2)
+    assert w._slider_widget._debounce == 0
+    w._slider.value = 56.2                   # a move of the handle reaches the widget's value
+    assert w.value == 56.2 and w._value_edit.value == 56.2
+
+
+def test_no_server_no_wait():
+    from bokeh.document import Document
+
+    asyncio.run(sockets_free(Document()))
+    asyncio.run(sockets_free(SimpleNamespace()))
+
+
+def test_a_half_written_message_is_waited_for():
+    from tornado.locks import Lock
+
+    async def main():
+        lock = Lock()
+        await lock.acquire()                 # a message's frames going out
+        waiting = asyncio.ensure_future(sockets_free(_page_showing(lock)))
+        for _ in range(5):
+            await asyncio.sleep(0)
+        assert not waiting.done()
+        lock.release()                       # the last frame written
+        await waiting
+
+    asyncio.run(main())
+
+
+def test_a_page_that_stops_reading_holds_nothing_back(monkeypatch):
+    from tornado.locks import Lock
+
+    monkeypatch.setattr(widgets, "LONGEST_WAIT", 0.01)
+
+    async def main():
+        lock = Lock()
+        await lock.acquire()                 # never released
+        await sockets_free(_page_showing(lock))
+
+    asyncio.run(main())

@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+from optdesign.quantities.bounds import QuantityBound
 from optdesign.quantities.criteria import objective_of, quantity_specs
 from optdesign.errors import ProblemError
 from optdesign.evaluation.figures import evaluate_problem
@@ -72,6 +73,11 @@ def test_the_older_keys_and_their_quantity_names_load_the_same_problem():
     # objective.max_ripple is the same bound, whatever the objective
     e = problem_from_dict(_data(objective__max_ripple=0.2))
     assert e.constraints == d.constraints and e.quantity_bounds == d.quantity_bounds
+    # a bound that only tracks a quantity (a front's axis) outlives a moved floor
+    tracked = e.with_quantity_bounds(e.quantity_bounds + (QuantityBound("swing"),))
+    moved = tracked.with_limit("ratio", "lower", 0.5).with_limit("ratio", "lower", None)
+    assert "swing" in {s.key for s in moved.quantity_bounds}
+    assert moved.constraints.min_ratio == 0.0
 
 
 # --------------------------------------------------------------------------- solves

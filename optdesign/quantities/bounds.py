@@ -86,11 +86,14 @@ def with_side(bounds, name: str, side: str, value: float | None) -> tuple:
     out, found = [], False
     for b in bounds:
         if b.name == name and b.at is None:
-            b, found = replace(b, **{side: float(value)}), True
+            found = True
+            b = replace(b, **{side: float(value)})
+            if not (_bounded(b) or b.tracked):
+                continue            # nothing left of it
         out.append(b)
-    if not found:
+    if not found and math.isfinite(value):
         out.append(replace(QuantityBound(name), **{side: float(value)}))
-    return ordered(b for b in out if _bounded(b))
+    return ordered(out)
 
 
 def ordered(bounds) -> tuple:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import copy
 import io
 import json
+import math
 import os
 import signal
 import subprocess
@@ -132,6 +133,14 @@ def _drop(data, path):
         node.pop(key, None)
 
 
+def _times(value, factor):
+    """``value * factor``, an integer too large for a float scaled as infinity."""
+    try:
+        return value * factor
+    except OverflowError:
+        return math.inf if (value > 0) == (factor > 0) else -math.inf
+
+
 def _scale(data, path, factor):
     """Multiply the number at ``path`` (or every number of a list or bounds there)."""
     node, key = _parent(data, path)
@@ -141,10 +150,10 @@ def _scale(data, path, factor):
     if isinstance(value, bool):
         return
     if isinstance(value, (int, float)):
-        node[key] = value * factor
+        node[key] = _times(value, factor)
     elif isinstance(value, list):
-        node[key] = [v * factor if isinstance(v, (int, float)) and not isinstance(v, bool)
-                          else v for v in value]
+        node[key] = [_times(v, factor) if isinstance(v, (int, float)) and not isinstance(v, bool)
+                     else v for v in value]
     elif isinstance(value, dict):
         for k in list(value):
             _scale(value, k, factor)
@@ -319,6 +328,8 @@ FUZZ = settings(deadline=None, max_examples=ANALYZE_EXAMPLES, print_blob=True,
 @example(recipe=("sharkov2022", (("scale", "design.l3", 0.3),)))      # exit 1, assembles: false
 @example(recipe=("sharkov2022", (("set", "regulation.eccentricity", [1.0, 1e-320]),)))
 @example(recipe=("sharkov2022", (("set", "input_speed", 10**400),)))
+@example(recipe=("driveline", (("set", "constraints.max_speed_fraction_of_critical", 10**30),)))
+@example(recipe=("driveline", (("set", "constraints", 10**400), ("scale", "constraints", 1.0))))
 @example(recipe=("sharkov2022", (("set", "design.phases", {"lower": 4, "upper": 1e9}),)))
 @example(recipe=("sharkov2022", (("set", "design.phases", 1000),)))
 @example(recipe=("sharkov2022", (("set", "design.phases", 1e30),)))

@@ -23,13 +23,14 @@ of the first critical speed; ``solve`` keeps it as a constraint).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from optdesign.declarations import Key, REQUIRED, names
 from optdesign.driveline import model
-from optdesign.errors import ProblemError
+from optdesign.errors import ProblemError, shown
 
 TUBE_KEYS = ("outer_diameter_mm", "wall_mm", "youngs_modulus_gpa", "density_kg_m3")
 DIRECT_KEYS = ("mass_per_length_kg_m", "EI_n_m2")
@@ -250,8 +251,9 @@ class DrivelineSection:
         key = f"constraints.{CONSTRAINT_KEY}"
         value = problem.constraints.extra[CONSTRAINT_KEY]
         if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                or not np.isfinite(value):
-            raise ProblemError(f"{self.source}: {key} must be a number in (0, 1) (got {value!r})")
+                or not math.isfinite(_as_float(value)):
+            raise ProblemError(f"{self.source}: {key} must be a number in (0, 1) "
+                               f"(got {shown(value)})")
         if not 0.0 < value < 1.0:
             raise ProblemError(f"{self.source}: {key} must lie in (0, 1) (got {value:g})")
         if self.operating_speed is not None and \
@@ -389,3 +391,11 @@ def _read_straightness(raw, reader, length_mm) -> tuple[float, str]:
     per_metre = classes[name]
     return (model.initial_deflection(length_mm * 1e-3, per_metre),
             f"GOST 5005-82 {name}: {per_metre:g} mm/m")
+
+
+def _as_float(value) -> float:
+    """``value`` as a float, an integer too large for one as infinity."""
+    try:
+        return float(value)
+    except OverflowError:
+        return math.inf

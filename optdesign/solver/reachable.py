@@ -12,12 +12,10 @@ relaxed optimum meets every constraint and the solve polishes from it.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass, replace
 
 from optdesign.quantities import get_quantity
-from optdesign.quantities.criteria import (bounded_sides, constraints_of, objective_of,
-                                           objectives, value_of)
+from optdesign.quantities.criteria import bounded_sides, constraints_of, objectives, value_of
 from optdesign.solver.verify import verify
 
 #: the ripple cap of the largest-ratio solve that finds the largest reachable ratio

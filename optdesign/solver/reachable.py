@@ -74,8 +74,7 @@ def relaxed(problem, name: str, side: str | None = None):
     ``side`` given: a band whose upper side the least value reachable lies beyond is out of
     reach as surely as a cap. Every other constraint is kept: one that came with the
     objective (the ripple cap of the largest ratio) becomes a bound of its own."""
-    criterion = next((c for c in constraints_of(problem) if c.name == name), None)
-    spec = criterion.quantity_bound(problem) if criterion is not None else None
+    criterion, spec = _bound_of(problem, name)
     if spec is None or spec.at is not None:
         return None
     sides = bounded_sides(spec)
@@ -103,8 +102,7 @@ def sides_to_relax(problem, name: str, checked=()) -> list[str | None]:
     """The sides of constraint ``name``'s bound to relax, in turn: its one side (None), or
     a band's two, the side more of the ``checked`` designs (verifications) miss first, the
     upper one on a tie."""
-    criterion = next((c for c in constraints_of(problem) if c.name == name), None)
-    spec = criterion.quantity_bound(problem) if criterion is not None else None
+    _, spec = _bound_of(problem, name)
     if spec is None or len(bounded_sides(spec)) != 2:
         return [None]
     missed = {"lower": 0, "upper": 0}
@@ -115,12 +113,33 @@ def sides_to_relax(problem, name: str, checked=()) -> list[str | None]:
     return sorted(("upper", "lower"), key=lambda side: -missed[side])
 
 
-def checked_designs(problem, known) -> list:
-    """The exact checks of the first of ``known`` (the user's design) and of its last
-    :data:`KNOWN_CHECKED` - 1 (where the polishes ended), those that assemble."""
+def checked_designs(check, known) -> list:
+    """The exact checks (``check``: a design's verification) of the first of ``known`` (the
+    user's design) and of its last :data:`KNOWN_CHECKED` - 1 (where the polishes ended),
+    those that assemble."""
     designs = list(known)
     picks = designs[:1] + designs[1:][-(KNOWN_CHECKED - 1):]
-    return [ver for ver in (verify(problem, d) for d in picks) if ver.measured is not None]
+    return [ver for ver in map(check, picks) if ver.measured is not None]
+
+
+def _bound_of(problem, name: str):
+    """(constraint ``name`` of ``problem``, the bound on a quantity it holds), each None
+    where there is none."""
+    criterion = next((c for c in constraints_of(problem) if c.name == name), None)
+    return criterion, criterion.quantity_bound(problem) if criterion is not None else None
+
+
+def _checker(problem):
+    """``verify(problem, design)``, each design verified once (the verdict reads the known
+    designs twice: for the bounds they break, and as candidates for the reachable value)."""
+    done = {}
+
+    def check(design):
+        key = tuple(sorted(design.items()))
+        if key not in done:
+            done[key] = verify(problem, design)
+        return done[key]
+    return check
 
 
 def ranked_candidates(problem, binding: str | None, checked) -> list[str]:
@@ -163,7 +182,8 @@ def reach_of(problem, count: int, binding: str | None, solve_phase, workers: int
     verified exactly under ``problem``: a verdict never contradicts a design the tool has
     seen."""
     within, tried = None, 0
-    checked = checked_designs(problem, known)
+    check = _checker(problem)
+    checked = checked_designs(check, known)
     tries = ((name, side) for name in ranked_candidates(problem, binding, checked)
              for side in sides_to_relax(problem, name, checked))
     for name, band_side in tries:
@@ -184,7 +204,7 @@ def reach_of(problem, count: int, binding: str | None, solve_phase, workers: int
             # the known designs are verified once, with the first pass
             designs = ([best.design] if best.status == "optimal" else []) + \
                 (list(known) if reach is None else [])
-            reach = _nearest(problem, name, designs, read, reach,
+            reach = _nearest(check, name, designs, read, reach,
                              (figure, float(bound), side, unit, key))
             if reach is None or not reach.out_of_reach or _far(reach) or \
                     variant.solver.starts <= starts:
@@ -197,12 +217,12 @@ def reach_of(problem, count: int, binding: str | None, solve_phase, workers: int
     return within
 
 
-def _nearest(problem, name: str, designs, read, reach: Reach | None, what) -> Reach | None:
+def _nearest(check, name: str, designs, read, reach: Reach | None, what) -> Reach | None:
     """The nearest to the bound of ``reach`` and ``designs`` that meet every constraint but
-    ``name``, each verified exactly under ``problem``."""
+    ``name``, each verified exactly under the problem (``check``)."""
     figure, bound, side, unit, key = what
     for design in designs:
-        ver = verify(problem, design)
+        ver = check(design)
         if ver.measured is None or set(ver.violations) - {name}:
             continue
         value = float(read(ver.measured))

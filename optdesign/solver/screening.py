@@ -76,7 +76,7 @@ def screen(problem, count: int, n_designs: int, extra: list[dict] = (),
     base = problem.start_values() | {problem.model.count_variable: count}
     lower = np.array([problem.design[k].lower for k in free])
     upper = np.array([problem.design[k].upper for k in free])
-    if np.any(upper >= LOG_SPAN * lower):
+    if np.any(wide(lower, upper)):
         n_designs *= WIDE_FACTOR
     rows = [np.array([d[k] for k in free]) for d in [base, *extra]]
     if free:
@@ -119,14 +119,20 @@ LOG_SPAN = 1e2
 WIDE_FACTOR = 8
 
 
+def wide(lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Which ranges span :data:`LOG_SPAN` or more (sampled in their logarithm)."""
+    return upper >= LOG_SPAN * lower
+
+
 def unit_of(X: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
     """Designs' positions in the unit box of the free lengths: the inverse of
     :func:`spread` (logarithmic on a range of :data:`LOG_SPAN` or more)."""
     span = np.where(upper > lower, upper - lower, 1.0)
     out = (X - lower) / span
-    wide = upper >= LOG_SPAN * lower
-    if np.any(wide):
-        out[:, wide] = np.log(X[:, wide] / lower[wide]) / np.log(upper[wide] / lower[wide])
+    logarithmic = wide(lower, upper)
+    if np.any(logarithmic):
+        lo, hi = lower[logarithmic], upper[logarithmic]
+        out[:, logarithmic] = np.log(X[:, logarithmic] / lo) / np.log(hi / lo)
     return out
 
 
@@ -135,9 +141,10 @@ def spread(unit: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray
     :data:`LOG_SPAN`, evenly in the logarithm where it spans more (the NLP's own scaling,
     by the geometric mean of the bounds, is logarithmic too)."""
     out = qmc.scale(unit, lower, upper) if len(unit) else unit.reshape(0, len(lower))
-    wide = upper >= LOG_SPAN * lower
-    if np.any(wide) and len(unit):
-        out[:, wide] = lower[wide] * (upper[wide] / lower[wide]) ** unit[:, wide]
+    logarithmic = wide(lower, upper)
+    if np.any(logarithmic) and len(unit):
+        lo, hi = lower[logarithmic], upper[logarithmic]
+        out[:, logarithmic] = lo * (hi / lo) ** unit[:, logarithmic]
     return out
 
 

@@ -28,6 +28,7 @@ from optdesign.quantities.criteria import (LengthConstraint, bound_excess, const
                                            interval_quantities, objective_of,
                                            quantity_specs, quantity_tolerance,
                                            searched_quantities)
+from optdesign.solver import built
 from optdesign.solver.accuracy import solve_accuracy
 from optdesign.solver.nlp import Held, PhaseNLP, SECONDARY_BUDGET, is_robust
 from optdesign.solver.reachable import reach_of
@@ -114,7 +115,8 @@ class PhaseSolver:
         self.problem = problem
         self.count = count
         self.timings = Timings()
-        self._nlps: dict[int, PhaseNLP] = {}
+        #: this count's NLPs by slots, kept for the process (:mod:`optdesign.solver.built`)
+        self._nlps: dict[int, PhaseNLP] = built.kept(problem, count)
         #: optima found already: a run that reaches one of them is stopped (its basin is known)
         self.avoid: list[dict] = []
         self._nominal: PhaseSolver | None = None       # a robust problem's nominal solver
@@ -418,6 +420,11 @@ class _Polishing:
         seeds = list(seeds)
         together = min(s.basins, s.starts, len(seeds), self.workers)
         if together > 1:        # the best basins at once, one process each
+            # built here first: the forked processes inherit it (built.py), and the
+            # polishes after theirs run on it in this one
+            nlp = self.solver.nlp([()])
+            with self.solver.timings.stage("build"):
+                nlp.solver(s.hessian)
             runs = _in_parallel(self.problem, self.count, [c.values for c in seeds[:together]])
             for outcome, timings in runs:
                 self.record(outcome)

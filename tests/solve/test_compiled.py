@@ -16,6 +16,7 @@ import pytest
 
 from optdesign.commands.warmup import recipes_of
 from optdesign.problem.loader import problem_from_dict
+from optdesign.solver import built as kept_nlps
 from optdesign.solver import compiled, solve
 from tests.conftest import ROOT, file_data, run_main
 
@@ -67,11 +68,14 @@ def built(tmp_path_factory):
 @pytest.fixture
 def cache(built, monkeypatch):
     """The module's cache folder as the user's, compiled libraries loaded and no build
-    started by a solve."""
+    started by a solve; no NLP kept from an earlier solve (each test's solves build theirs,
+    as a new process would, and keep none built with a patched CasADi)."""
     where, problem, rec, path = built
     monkeypatch.setenv("XDG_CACHE_HOME", str(where.parent))
     monkeypatch.setenv(compiled.VARIABLE, "load")
-    return built
+    kept_nlps.forget()
+    yield built
+    kept_nlps.forget()
 
 
 def test_the_cache_folder_is_the_users_own_and_closed(built):

@@ -1,0 +1,61 @@
+"""NLPs built once per process: a phase count's NLP, kept for every later solve of the same
+problem.
+
+Building an NLP (:class:`~optdesign.solver.nlp.PhaseNLP`: the CasADi graph, its derivatives
+and IPOPT's function on them) costs 0.1-0.7 s, as much as several polishes; a second solve of
+the same problem in one process (a notebook, the explorer, a Pareto sweep's points, a warm
+benchmark) would pay it again. The NLPs are kept here, keyed by everything they are built
+from: the problem itself (compared whole, by its pickled form: the box's bounds scale the
+variables and bound them, the options shape the graph), the phase count, IPOPT's options
+and where its derivatives came from (``OPTDESIGN_COMPILE`` and the cache folder,
+:mod:`optdesign.solver.compiled`). Polishes forked from this
+process (:func:`optdesign.solver.driver._in_parallel`) inherit what is kept.
+
+A kept NLP carries no state from one solve to the next: each IPOPT run starts from the
+values, bounds and parameters it is given, and its iteration watch is armed afresh
+(:meth:`~optdesign.solver.nlp._Watch.start`), so a solve on a kept NLP makes the same
+iterations, to the bit, as on a new one. At most :data:`KEPT` problems' NLPs are kept, the
+least recently used let go first.
+"""
+from __future__ import annotations
+
+import os
+import pickle
+import threading
+from collections import OrderedDict
+
+from optdesign.solver import compiled
+
+#: phase counts' NLPs kept (problems × counts); an NLP takes 1-40 MB
+KEPT = 32
+
+_kept: OrderedDict = OrderedDict()
+_lock = threading.Lock()
+
+
+def key_of(problem, count: int) -> bytes:
+    """What an NLP of ``problem``'s ``count`` is built from, as bytes (equal problems give
+    equal keys, in this process or in a forked one that received a pickled copy)."""
+    from optdesign.solver.nlp import IPOPT_OPTIONS
+
+    cache = os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~")
+    return pickle.dumps((compiled.mode(), cache, sorted(IPOPT_OPTIONS.items()), problem,
+                         int(count)))
+
+
+def kept(problem, count: int) -> dict:
+    """The NLPs of ``problem``'s ``count`` built in this process, by hand-over slots: the
+    same dict on every call, which the caller fills as it builds."""
+    key = key_of(problem, count)
+    with _lock:
+        nlps = _kept.pop(key, None)
+        _kept[key] = nlps = {} if nlps is None else nlps
+        while len(_kept) > KEPT:
+            _kept.popitem(last=False)
+    return nlps
+
+
+def forget() -> None:
+    """Let go of every kept NLP (the next solve of each problem builds it again)."""
+    with _lock:
+        _kept.clear()

@@ -13,9 +13,12 @@ process (:func:`optdesign.solver.driver._in_parallel`) inherit what is kept.
 
 A kept NLP carries no state from one solve to the next: each IPOPT run starts from the
 values, bounds and parameters it is given, and its iteration watch is armed afresh
-(:meth:`~optdesign.solver.nlp._Watch.start`), so a solve on a kept NLP makes the same
-iterations, to the bit, as on a new one. At most :data:`KEPT` problems' NLPs are kept, the
-least recently used let go first.
+(:meth:`~optdesign.solver.nlp._Watch.start`). What a solve would build is what it is given:
+the NLP of exactly the hand-over slots it asks for (a solve that once needed more slots
+leaves an NLP of more slots here, which a later solve asking for fewer is not given: IPOPT
+on it would take another path). So a solve on kept NLPs makes the same iterations, to the
+bit, as on new ones. At most :data:`KEPT` problems' counts are kept, the least recently used
+let go first.
 """
 from __future__ import annotations
 
@@ -44,8 +47,8 @@ def key_of(problem, count: int) -> bytes:
 
 
 def kept(problem, count: int) -> dict:
-    """The NLPs of ``problem``'s ``count`` built in this process, by hand-over slots: the
-    same dict on every call, which the caller fills as it builds."""
+    """The NLPs of ``problem``'s ``count`` built in this process, by their number of
+    hand-over slots: the same dict on every call, which the caller fills as it builds."""
     key = key_of(problem, count)
     with _lock:
         nlps = _kept.pop(key, None)

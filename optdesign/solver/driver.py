@@ -115,8 +115,9 @@ class PhaseSolver:
         self.problem = problem
         self.count = count
         self.timings = Timings()
-        #: this count's NLPs by slots, kept for the process (:mod:`optdesign.solver.built`)
-        self._nlps: dict[int, PhaseNLP] = built.kept(problem, count)
+        #: the NLPs this solver has used, by slots (each kept for the process as well:
+        #: :mod:`optdesign.solver.built`)
+        self._nlps: dict[int, PhaseNLP] = {}
         #: optima found already: a run that reaches one of them is stopped (its basin is known)
         self.avoid: list[dict] = []
         self._nominal: PhaseSolver | None = None       # a robust problem's nominal solver
@@ -130,9 +131,13 @@ class PhaseSolver:
             if slots >= need:
                 return nlp
         curves = self.count * len(STROKE_SIGNS[self.problem.stroke])
-        with self.timings.stage("build"):       # a slot per curve, more if the design has more
-            nlp = PhaseNLP(self.problem, self.count, max(need, curves))
-        self._nlps[nlp.slots] = nlp
+        slots = max(need, curves)               # a slot per curve, more if the design has more
+        kept = built.kept(self.problem, self.count)
+        nlp = kept.get(slots)           # exactly the one this solver would build: the same run
+        if nlp is None:
+            with self.timings.stage("build"):
+                nlp = kept[slots] = PhaseNLP(self.problem, self.count, slots)
+        self._nlps[slots] = nlp
         return nlp
 
     def nominal_solver(self) -> "PhaseSolver":

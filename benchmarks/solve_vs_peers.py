@@ -594,7 +594,9 @@ def one_check_seconds(problem, design: dict, repeats: int = 5) -> float:
 
 
 def ours_child(case: str) -> None:
-    """Runs in a fresh process: our solve, timed around the call alone; JSON on stdout."""
+    """Runs in a fresh process: our solve, timed around the call alone (the solver's modules
+    imported first: ``solve`` imports its driver at its first call); JSON on stdout."""
+    import optdesign.solver.driver  # noqa: F401
     print("@@OURS@@" + json.dumps(timed_solve(load_case(case))[1]))
 
 

@@ -21,6 +21,17 @@ os.environ["OPTDESIGN_COMPILE"] = "load"
 PAPER = dict(l0=225.0, l1=20.0, l2=225.0, l2_prime=100.0, l3=56.0, phases=6)
 
 
+@pytest.fixture(autouse=True)
+def _no_nlp_built_under_a_patch(request):
+    """A test that patches code (``monkeypatch``) keeps no NLP for the tests after it: an
+    NLP built under a patched mechanism, criterion or option would be given to a later solve
+    of an equal problem (optdesign.solver.built)."""
+    yield
+    if "monkeypatch" in request.fixturenames:
+        from optdesign.solver import built
+        built.forget()
+
+
 @pytest.fixture
 def paper_design():
     from optdesign.evaluation.design import Design

@@ -134,6 +134,20 @@ def test_a_solve_carries_the_block_and_prints_one_line(disc):
     assert units["d_transmission_angle_margin_d_length_deg_per_mm"].startswith("deg/mm")
 
 
+def test_only_the_answer_carries_sensitivities():
+    """Computed for the answer alone: the other counts' blocks are empty, and the answer's
+    is the block of its design, exactly."""
+    from optdesign.solver import solve
+
+    problem = load_problem(ROOT / "problems" / "vergov_solve.yaml")
+    result = solve(problem)
+    assert [p.status for p in result.per_phase] == ["optimal", "optimal"]
+    best = result.best_phase()
+    assert best.sensitivities == result.sensitivities == \
+        sensitivities(problem, result.design).to_dict()
+    assert [p.sensitivities for p in result.per_phase if p is not best] == [{}]
+
+
 def test_the_api_gives_a_design_s_sensitivities():
     import optdesign
 

@@ -6,10 +6,12 @@ and IPOPT's function on them) costs 0.1-0.7 s, as much as several polishes; a se
 the same problem in one process (a notebook, the explorer, a Pareto sweep's points, a warm
 benchmark) would pay it again. The NLPs are kept here, keyed by everything they are built
 from: the problem itself (compared whole, by its pickled form: the box's bounds scale the
-variables and bound them, the options shape the graph), the phase count, IPOPT's options
-and where its derivatives came from (``OPTDESIGN_COMPILE`` and the cache folder,
-:mod:`optdesign.solver.compiled`). Polishes forked from this
-process (:func:`optdesign.solver.driver._in_parallel`) inherit what is kept.
+variables and bound them, the options shape the graph), the constraint rows its mechanism's
+criteria give (code, not the file: a criterion added to a mechanism in this process builds
+another NLP), the phase count, IPOPT's options and where its derivatives came from
+(``OPTDESIGN_COMPILE`` and the cache folder, :mod:`optdesign.solver.compiled`). Polishes
+forked from this process (:func:`optdesign.solver.driver._in_parallel`) inherit what is
+kept.
 
 A kept NLP carries no state from one solve to the next: each IPOPT run starts from the
 values, bounds and parameters it is given, and its iteration watch is armed afresh
@@ -39,10 +41,14 @@ _lock = threading.Lock()
 def key_of(problem, count: int) -> bytes:
     """What an NLP of ``problem``'s ``count`` is built from, as bytes (equal problems give
     equal keys, in this process or in a forked one that received a pickled copy)."""
+    from optdesign.quantities.criteria import constraints_of
     from optdesign.solver.nlp import IPOPT_OPTIONS
 
     cache = os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~")
-    return pickle.dumps((compiled.mode(), cache, sorted(IPOPT_OPTIONS.items()), problem,
+    # the rows the mechanism's criteria give (code, not the file: a criterion added to a
+    # mechanism in this process builds another NLP)
+    rows = [(type(c).__qualname__, c.name) for c in constraints_of(problem)]
+    return pickle.dumps((compiled.mode(), cache, sorted(IPOPT_OPTIONS.items()), rows, problem,
                          int(count)))
 
 

@@ -921,7 +921,6 @@ def _fill(result: PhaseResult, problem, outcome: Outcome) -> PhaseResult:
         result.worst_case_min_transmission_angle_deg = angle.value
         result.worst_case_quantities = {case.quantity: case.value for case in bounded}
     result.active = outcome.record.active
-    result.sensitivities = sensitivity_record(problem, design, ver.evaluation)
     result.quantities = design_quantities(problem, _every_quantity_searched(problem,
                                                                             ver.evaluation))
     result.message = ""
@@ -976,6 +975,8 @@ def summarized(problem, per_phase: list[PhaseResult], t0: float) -> SolveResult:
         timings.add(Timings(**p.timings) if p.timings else Timings())
     with timings.stage("verification"):
         accuracy = solve_accuracy(problem, best)        # inside solve_time_s: part of the solve
+        if best is not None:        # the answer's alone: the other counts' stay empty
+            best.sensitivities = sensitivity_record(problem, best.design)
     return SolveResult(
         name=problem.name, status=status,
         design=best.design if best else None,

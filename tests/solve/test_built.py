@@ -60,3 +60,18 @@ def test_the_least_recently_used_are_let_go(fresh, monkeypatch):
     built.kept(problem, 7)
     assert built.kept(problem, 3) is first and first == {3: "an NLP"}
     assert built.kept(problem, 5) == {}         # let go: an empty dict to fill anew
+
+
+def test_a_criterion_added_to_the_mechanism_builds_another_nlp(fresh, monkeypatch):
+    """Code, not the file: a constraint the mechanism's criteria gain in this process (as
+    docs/architecture.md's worked example adds one) is not met by an NLP kept without it."""
+    from optdesign.mechanisms import get_mechanism
+    from optdesign.quantities.criteria import LengthConstraint
+
+    problem = problem_from_dict(file_data(VERGOV))
+    before = built.key_of(problem, 3)
+    mech = get_mechanism(problem.mechanism)
+    own = mech.criteria
+    monkeypatch.setattr(mech, "criteria", lambda constraints, options: own(
+        constraints, options) + [LengthConstraint("least_xd", lambda p: p["XD"], lower=1.0)])
+    assert built.key_of(problem, 3) != before

@@ -24,6 +24,7 @@ let go first.
 """
 from __future__ import annotations
 
+import hashlib
 import os
 import pickle
 import threading
@@ -48,8 +49,13 @@ def key_of(problem, count: int) -> bytes:
     # the rows the mechanism's criteria give (code, not the file: a criterion added to a
     # mechanism in this process builds another NLP)
     rows = [(type(c).__qualname__, c.name) for c in constraints_of(problem)]
-    return pickle.dumps((compiled.mode(), cache, sorted(IPOPT_OPTIONS.items()), rows, problem,
-                         int(count)))
+    # Pickle writes an object met twice once (by reference) and interns the attribute names
+    # it reads back, so equal problems may pickle to different bytes: a copy a forked polish
+    # received shares other strings than the problem it was made from. Each part is pickled
+    # on its own, and the problem as its copy is (read back once): the same bytes for both.
+    parts = (compiled.mode(), cache, sorted(IPOPT_OPTIONS.items()), rows,
+             pickle.loads(pickle.dumps(problem)), int(count))
+    return b"".join(hashlib.sha256(pickle.dumps(part)).digest() for part in parts)
 
 
 def kept(problem, count: int) -> dict:

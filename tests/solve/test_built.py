@@ -1,9 +1,11 @@
 """NLPs kept for the process (optdesign.solver.built): a second solve of a problem builds
 nothing and answers the same to the last bit; a problem that differs in anything the NLP is
 built from (here a length's box) gets an NLP of its own."""
+import pickle
+
 import pytest
 
-from optdesign.problem.loader import problem_from_dict
+from optdesign.problem.loader import load_problem, problem_from_dict
 from optdesign.solver import built, driver, solve
 from optdesign.solver.nlp import PhaseNLP
 from tests.conftest import ROOT, file_data
@@ -23,16 +25,42 @@ def fresh():
     built.forget()
 
 
-def test_a_second_solve_builds_nothing_and_answers_the_same(fresh, monkeypatch):
-    builds = []
-    monkeypatch.setattr(driver, "PhaseNLP",
-                        lambda *a: builds.append(a[1]) or PhaseNLP(*a))
-    problem = problem_from_dict(file_data(VERGOV))
-    first = solve(problem)
-    assert builds == [3, 5] and first.timings_s["build"] > 0.01
-    again = solve(problem_from_dict(file_data(VERGOV)))      # an equal problem, loaded again
-    assert builds == [3, 5] and again.timings_s["build"] < 1e-3
+def test_a_second_solve_builds_nothing_and_answers_the_same(fresh, monkeypatch, tmp_path):
+    """Each count's NLP built once, in this process: the polishes it forks (two at once on
+    the disc problem) inherit it, and a second solve builds none."""
+    log = tmp_path / "builds"
+
+    def counted(*args):
+        with open(log, "a") as f:           # from the forked polishes as well
+            f.write(f"{args[1]}\n")
+        return PhaseNLP(*args)
+
+    def builds() -> list[int]:
+        return [int(x) for x in log.read_text().split()] if log.exists() else []
+
+    monkeypatch.setattr(driver, "PhaseNLP", counted)
+    disc = load_problem(ROOT / "problems" / "sharkov2022_disc.yaml")
+    first = solve(disc)
+    assert [p.screening["polished"] for p in first.per_phase] == [2]
+    assert builds() == [6] and first.timings_s["build"] > 0.01
+    again = solve(load_problem(ROOT / "problems" / "sharkov2022_disc.yaml"))  # loaded again
+    assert builds() == [6] and again.timings_s["build"] < 1e-3
     assert answer(again) == answer(first)
+    vergov = problem_from_dict(file_data(VERGOV))
+    assert answer(solve(vergov)) == answer(solve(problem_from_dict(file_data(VERGOV))))
+    assert builds() == [6, 3, 5]
+
+
+def test_a_copy_sent_to_a_forked_polish_has_the_same_key():
+    """Pickled together with its count (as a polish's job is), the copy's key is the key of
+    the problem: the forked process finds the NLP it inherited."""
+    for problem in (problem_from_dict(file_data(VERGOV)),
+                    load_problem(ROOT / "problems" / "free_design.yaml")):
+        job = (problem, 3, problem.start_values(), False)       # driver._in_parallel's
+        copy, count, *_ = pickle.loads(pickle.dumps(job))
+        assert built.key_of(copy, count) == built.key_of(problem, 3)
+        again = pickle.loads(pickle.dumps(copy))
+        assert built.key_of(again, 3) == built.key_of(problem, 3)
 
 
 def test_another_box_gets_its_own_nlp(fresh):

@@ -9,9 +9,9 @@ from: the problem itself (compared whole, by its pickled form: the box's bounds 
 variables and bound them, the options shape the graph), the constraint rows its mechanism's
 criteria give (code, not the file: a criterion added to a mechanism in this process builds
 another NLP), the phase count, IPOPT's options and where its derivatives came from
-(``OPTDESIGN_COMPILE`` and the cache folder, :mod:`optdesign.solver.compiled`). Polishes
-forked from this process (:func:`optdesign.solver.driver._in_parallel`) inherit what is
-kept.
+(``OPTDESIGN_COMPILE`` and the cache folder, :mod:`optdesign.solver.compiled`), and the
+thread that solves (two threads never share an NLP). Polishes forked from this process
+(:func:`optdesign.solver.driver._in_parallel`) inherit what is kept.
 
 A kept NLP carries no state from one solve to the next: each IPOPT run starts from the
 values, bounds and parameters it is given, and its iteration watch is armed afresh
@@ -32,8 +32,9 @@ from collections import OrderedDict
 
 from optdesign.solver import compiled
 
-#: phase counts' NLPs kept (problems × counts); an NLP takes 1-40 MB
-KEPT = 32
+#: phase counts' NLPs kept (problems × counts); an NLP takes up to about 20 MB (the disc
+#: problem's at 24 phases: 17 MB)
+KEPT = 16
 
 _kept: OrderedDict = OrderedDict()
 _lock = threading.Lock()
@@ -53,8 +54,10 @@ def key_of(problem, count: int) -> bytes:
     # it reads back, so equal problems may pickle to different bytes: a copy a forked polish
     # received shares other strings than the problem it was made from. Each part is pickled
     # on its own, and the problem as its copy is (read back once): the same bytes for both.
+    # and per thread: an NLP's IPOPT function and its iteration watch serve one run at a
+    # time (a polish forked from a thread runs on a copy of that thread, and inherits its)
     parts = (compiled.mode(), cache, sorted(IPOPT_OPTIONS.items()), rows,
-             pickle.loads(pickle.dumps(problem)), int(count))
+             pickle.loads(pickle.dumps(problem)), int(count), threading.get_ident())
     return b"".join(hashlib.sha256(pickle.dumps(part)).digest() for part in parts)
 
 

@@ -103,3 +103,16 @@ def test_a_criterion_added_to_the_mechanism_builds_another_nlp(fresh, monkeypatc
     monkeypatch.setattr(mech, "criteria", lambda constraints, options: own(
         constraints, options) + [LengthConstraint("least_xd", lambda p: p["XD"], lower=1.0)])
     assert built.key_of(problem, 3) != before
+
+
+def test_two_threads_never_share_an_nlp(fresh):
+    """An NLP's IPOPT function and iteration watch serve one run at a time."""
+    import threading
+
+    problem = problem_from_dict(file_data(VERGOV))
+    mine = built.kept(problem, 3)
+    theirs = []
+    thread = threading.Thread(target=lambda: theirs.append(built.kept(problem, 3)))
+    thread.start()
+    thread.join()
+    assert theirs[0] is not mine and built.kept(problem, 3) is mine

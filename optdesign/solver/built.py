@@ -54,8 +54,8 @@ def key_of(problem, count: int) -> bytes:
     # it reads back, so equal problems may pickle to different bytes: a copy a forked polish
     # received shares other strings than the problem it was made from. Each part is pickled
     # on its own, and the problem as its copy is (read back once): the same bytes for both.
-    # and per thread: an NLP's IPOPT function and its iteration watch serve one run at a
-    # time (a polish forked from a thread runs on a copy of that thread, and inherits its)
+    # The thread is a part: an NLP's IPOPT function and its iteration watch serve one run at
+    # a time (a polish forked from a thread runs on a copy of it, and inherits its NLPs).
     parts = (compiled.mode(), cache, sorted(IPOPT_OPTIONS.items()), rows,
              pickle.loads(pickle.dumps(problem)), int(count), threading.get_ident())
     return b"".join(hashlib.sha256(pickle.dumps(part)).digest() for part in parts)

@@ -14,6 +14,13 @@ it tries again every 10 ms; so the callbacks start once the socket is free, and 
 update leaves the server as soon as they end, in one message (the slider's number field
 with the redraw).
 
+And one thing the server's sockets must not do: hold a small frame back until the page has
+acknowledged the previous one (Nagle's algorithm, which Tornado's websockets keep on). A reply
+is several frames written one after another (three for a message, two more for each array);
+the page acknowledges a segment only after its delayed-acknowledgement timer (40 ms on Linux),
+so a move's reply could wait that long before its last frames left the server.
+:func:`send_at_once` turns that off for every page showing a document.
+
 Importing this module imports Panel.
 """
 from __future__ import annotations
@@ -32,6 +39,7 @@ class _PromptFloatSlider(FloatSlider):
         from panel.io import hold
         from panel.io.state import set_curdoc
 
+        send_at_once(doc)
         await sockets_free(doc)
         with set_curdoc(doc), hold(doc):        # every change of the move in one message
             await super()._change_coroutine(doc, event_id)
@@ -48,6 +56,26 @@ class PromptSlider(EditableFloatSlider):
 LONGEST_WAIT = 0.25
 
 
+def _sockets(doc) -> list:
+    """The websockets of the pages showing ``doc`` (none outside a server)."""
+    context = getattr(doc, "session_context", None)
+    session = getattr(context, "session", None)
+    return [getattr(connection, "_socket", None)
+            for connection in list(getattr(session, "_subscribed_connections", ()))]
+
+
+def send_at_once(doc) -> None:
+    """Every frame written to a page showing ``doc`` leaves at once (TCP_NODELAY on its
+    socket, once per socket); nothing outside a server."""
+    for socket in _sockets(doc):
+        if socket is None or getattr(socket, "_sends_at_once", False) \
+                or not hasattr(socket, "set_nodelay") \
+                or getattr(socket, "ws_connection", None) is None:
+            continue
+        socket.set_nodelay(True)
+        socket._sends_at_once = True
+
+
 async def sockets_free(doc) -> None:
     """Return once no message is being written to a page showing ``doc`` (each page's
     socket holds its write lock while a message's frames go out), or after
@@ -56,10 +84,8 @@ async def sockets_free(doc) -> None:
 
     from tornado.util import TimeoutError as Timeout
 
-    context = getattr(doc, "session_context", None)
-    session = getattr(context, "session", None)
-    for connection in list(getattr(session, "_subscribed_connections", ())):
-        lock = getattr(getattr(connection, "_socket", None), "write_lock", None)
+    for socket in _sockets(doc):
+        lock = getattr(socket, "write_lock", None)
         if lock is None:
             continue
         try:

@@ -8,7 +8,7 @@ import pytest
 pytest.importorskip("panel")
 
 from optdesign.explorer import widgets  # noqa: E402
-from optdesign.explorer.widgets import PromptSlider, sockets_free  # noqa: E402
+from optdesign.explorer.widgets import PromptSlider, send_at_once, sockets_free  # noqa: E402
 
 
 def _page_showing(lock) -> SimpleNamespace:
@@ -60,3 +60,15 @@ def test_a_page_that_stops_reading_holds_nothing_back(monkeypatch):
         await sockets_free(_page_showing(lock))
 
     asyncio.run(main())
+
+
+def test_every_frame_leaves_at_once():
+    """The page's socket sends each frame as it is written (TCP_NODELAY), set once."""
+    calls = []
+    socket = SimpleNamespace(ws_connection=object(), set_nodelay=calls.append)
+    session = SimpleNamespace(_subscribed_connections=[SimpleNamespace(_socket=socket)])
+    doc = SimpleNamespace(session_context=SimpleNamespace(session=session))
+    send_at_once(doc)
+    send_at_once(doc)
+    assert calls == [True]
+    send_at_once(SimpleNamespace())                 # outside a server: nothing to do

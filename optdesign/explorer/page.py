@@ -310,17 +310,17 @@ class Page:
                 source.data = {k: [] for k in source.data}
             return
         t = shot.turn
-        # the crank angles as a list (sent as text, a few bytes each); the speeds as arrays
-        # (sent as binary): every array is a message of its own to the page
+        # the crank angles as a list (sent as text, a few bytes each, and only when the
+        # number of curves changes); the speeds as arrays (sent as binary): every array is
+        # a message of its own to the page
         deg = np.append(t.phi_deg, 360.0).tolist()
-        self.members.data = dict(
-            xs=[deg] * len(t.speeds), ys=[np.append(v, v[0]) for v in t.speeds],
-            colour=[MEMBER_COLOURS[k % len(MEMBER_COLOURS)] for k in range(len(t.speeds))])
+        _columns(self.members, xs=[deg] * len(t.speeds),
+                 ys=[np.append(v, v[0]) for v in t.speeds],
+                 colour=[MEMBER_COLOURS[k % len(MEMBER_COLOURS)] for k in range(len(t.speeds))])
         shown = t.outputs or (("output", t.output),)
-        self.outputs.data = dict(
-            xs=[deg] * len(shown), ys=[np.append(v, v[0]) for _, v in shown],
-            colour=[OUTPUT_COLOURS[i % len(OUTPUT_COLOURS)] for i in range(len(shown))],
-            label=[label for label, _ in shown])
+        _columns(self.outputs, xs=[deg] * len(shown), ys=[np.append(v, v[0]) for _, v in shown],
+                 colour=[OUTPUT_COLOURS[i % len(OUTPUT_COLOURS)] for i in range(len(shown))],
+                 label=[label for label, _ in shown])
         # the speeds' span set here, as the page would fit it (5 % margins), so the page
         # neither fits it nor sends the fitted span back
         curves = np.concatenate([t.speeds.ravel(), *(v for _, v in shown)])
@@ -329,7 +329,7 @@ class Page:
         joints = t.positions.reshape(-1, 2)
         gap = np.full((1, len(t.names), 2), np.nan)             # (frames + 1, joints, 2)
         paths = np.concatenate([t.positions, gap]).transpose(1, 0, 2).reshape(-1, 2)
-        self.paths.data = dict(x=paths[:, 0], y=paths[:, 1])
+        _columns(self.paths, x=paths[:, 0], y=paths[:, 1])
         lo, hi = np.nanmin(joints, axis=0), np.nanmax(joints, axis=0)
         half = 0.55 * max(hi - lo) or 1.0
         centre = (lo + hi) / 2
@@ -350,11 +350,10 @@ class Page:
         b = [at[index[link[1]]] for link in t.links]
         a, b = np.array(a), np.array(b)
         # a few numbers each: lists, in the message's text
-        self.links.data = dict(x0=a[:, 0].tolist(), y0=a[:, 1].tolist(), x1=b[:, 0].tolist(),
-                               y1=b[:, 1].tolist(),
-                               colour=[ROLE_COLOURS[link[2]] for link in t.links],
-                               width=[ROLE_WIDTHS[link[2]] for link in t.links])
-        self.joints.data = dict(x=at[:, 0].tolist(), y=at[:, 1].tolist(), name=list(t.names))
+        _columns(self.links, x0=a[:, 0].tolist(), y0=a[:, 1].tolist(), x1=b[:, 0].tolist(),
+                 y1=b[:, 1].tolist(), colour=[ROLE_COLOURS[link[2]] for link in t.links],
+                 width=[ROLE_WIDTHS[link[2]] for link in t.links])
+        _columns(self.joints, x=at[:, 0].tolist(), y=at[:, 1].tolist(), name=list(t.names))
         self.cursor.location = float(t.phi_deg[frame])
 
 
@@ -362,6 +361,32 @@ def _internal(exc: Exception) -> str:
     """The page's line for a fault that is a bug, as the command line words it."""
     return (f"internal error ({type(exc).__name__}: {str(exc)[:200]}); please report it with "
             f"the problem file")
+
+
+def _columns(source, **columns) -> None:
+    """Put ``columns`` in the ColumnDataSource ``source``, sending the page only those that
+    changed (a move changes the curves, not the crank angles, colours or names); all of them
+    when the number of rows changes."""
+    old = source.data
+    rows = {len(v) for v in columns.values()}
+    if set(old) != set(columns) or rows != {len(v) for v in old.values()}:
+        source.data = columns
+        return
+    changed = {k: v for k, v in columns.items() if not _same(old[k], v)}
+    if changed:
+        source.data.update(changed)
+
+
+def _same(old, new) -> bool:
+    """Whether two columns hold the same values (NaN equal to NaN)."""
+    if isinstance(old, np.ndarray) or isinstance(new, np.ndarray):
+        old, new = np.asarray(old), np.asarray(new)
+        return old.shape == new.shape and old.dtype == new.dtype and bool(
+            np.array_equal(old, new, equal_nan=old.dtype.kind == "f"))
+    if len(old) != len(new):
+        return False
+    return all(_same(a, b) if isinstance(a, (np.ndarray, list)) or isinstance(b, np.ndarray)
+               else a == b for a, b in zip(old, new))
 
 
 def _span(axis, low: float, high: float, margin: float) -> None:

@@ -19,11 +19,15 @@ acknowledged the previous one (Nagle's algorithm, which Tornado's websockets kee
 is several frames written one after another (three for a message, two more for each array);
 the page acknowledges a segment only after its delayed-acknowledgement timer (40 ms on Linux),
 so a move's reply could wait that long before its last frames left the server.
-:func:`send_at_once` turns that off for every page showing a document.
+:func:`send_at_once` turns that off for every page showing a document; and while the move's
+reply is written, :func:`corked` holds its frames so that they leave together, the page
+taking them in at once rather than one packet at a time.
 
 Importing this module imports Panel.
 """
 from __future__ import annotations
+
+from contextlib import contextmanager
 
 from panel.widgets import EditableFloatSlider, FloatSlider
 
@@ -41,7 +45,8 @@ class _PromptFloatSlider(FloatSlider):
 
         send_at_once(doc)
         await sockets_free(doc)
-        with set_curdoc(doc), hold(doc):        # every change of the move in one message
+        # every change of the move in one message, its frames sent together
+        with corked(doc), set_curdoc(doc), hold(doc):
             await super()._change_coroutine(doc, event_id)
 
 
@@ -74,6 +79,36 @@ def send_at_once(doc) -> None:
             continue
         socket.set_nodelay(True)
         socket._sends_at_once = True
+
+
+@contextmanager
+def corked(doc):
+    """Within it, the frames written to the pages showing ``doc`` are held by the system and
+    leave together when it ends (TCP_CORK, where the system has it): a move's reply is two
+    frames for each of its arrays, each of which would otherwise be a packet of its own for
+    the page to take in one at a time. Nothing outside a server."""
+    import socket as sockets
+
+    held = []
+    if hasattr(sockets, "TCP_CORK"):
+        for page in _sockets(doc):
+            raw = getattr(getattr(getattr(page, "ws_connection", None), "stream", None),
+                          "socket", None)
+            if raw is None:
+                continue
+            try:
+                raw.setsockopt(sockets.IPPROTO_TCP, sockets.TCP_CORK, 1)
+            except OSError:
+                continue
+            held.append(raw)
+    try:
+        yield
+    finally:
+        for raw in held:
+            try:
+                raw.setsockopt(sockets.IPPROTO_TCP, sockets.TCP_CORK, 0)
+            except OSError:             # the page has gone: nothing to send
+                pass
 
 
 async def sockets_free(doc) -> None:

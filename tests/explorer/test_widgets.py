@@ -8,7 +8,8 @@ import pytest
 pytest.importorskip("panel")
 
 from optdesign.explorer import widgets  # noqa: E402
-from optdesign.explorer.widgets import PromptSlider, send_at_once, sockets_free  # noqa: E402
+from optdesign.explorer.widgets import (PromptSlider, corked, send_at_once,  # noqa: E402
+                                        sockets_free)
 
 
 def _page_showing(lock) -> SimpleNamespace:
@@ -72,3 +73,28 @@ def test_every_frame_leaves_at_once():
     send_at_once(doc)
     assert calls == [True]
     send_at_once(SimpleNamespace())                 # outside a server: nothing to do
+
+
+def test_a_reply_leaves_together():
+    """While a move's reply is written its frames are held (TCP_CORK), and let go after,
+    whatever happened meanwhile."""
+    import socket
+
+    if not hasattr(socket, "TCP_CORK"):
+        pytest.skip("no TCP_CORK on this system")
+    with socket.socket() as listening:
+        listening.bind(("127.0.0.1", 0))
+        listening.listen()
+        with socket.create_connection(listening.getsockname()) as raw:
+            page = SimpleNamespace(ws_connection=SimpleNamespace(
+                stream=SimpleNamespace(socket=raw)))
+            session = SimpleNamespace(_subscribed_connections=[SimpleNamespace(_socket=page)])
+            doc = SimpleNamespace(session_context=SimpleNamespace(session=session))
+            cork = (socket.IPPROTO_TCP, socket.TCP_CORK)
+            with pytest.raises(RuntimeError):
+                with corked(doc):
+                    assert raw.getsockopt(*cork) == 1
+                    raise RuntimeError("a fault while the reply is written")
+            assert raw.getsockopt(*cork) == 0
+    with corked(SimpleNamespace()):                 # outside a server: nothing held
+        pass

@@ -310,15 +310,16 @@ class Page:
                 source.data = {k: [] for k in source.data}
             return
         t = shot.turn
-        # the crank angles as a list (sent as text, a few bytes each, and only when the
-        # number of curves changes); the speeds as arrays (sent as binary): every array is
-        # a message of its own to the page
+        # the crank angles and the speeds as lists, in the message's text (the angles only
+        # when the number of curves changes); the joints' paths as two arrays, sent as
+        # binary (every array is two frames more of the message, each a task of the page's)
         deg = np.append(t.phi_deg, 360.0).tolist()
         _columns(self.members, xs=[deg] * len(t.speeds),
-                 ys=[np.append(v, v[0]) for v in t.speeds],
+                 ys=[_drawn(np.append(v, v[0])) for v in t.speeds],
                  colour=[MEMBER_COLOURS[k % len(MEMBER_COLOURS)] for k in range(len(t.speeds))])
         shown = t.outputs or (("output", t.output),)
-        _columns(self.outputs, xs=[deg] * len(shown), ys=[np.append(v, v[0]) for _, v in shown],
+        _columns(self.outputs, xs=[deg] * len(shown),
+                 ys=[_drawn(np.append(v, v[0])) for _, v in shown],
                  colour=[OUTPUT_COLOURS[i % len(OUTPUT_COLOURS)] for i in range(len(shown))],
                  label=[label for label, _ in shown])
         # the speeds' span set here, as the page would fit it (5 % margins), so the page
@@ -329,6 +330,7 @@ class Page:
         joints = t.positions.reshape(-1, 2)
         gap = np.full((1, len(t.names), 2), np.nan)             # (frames + 1, joints, 2)
         paths = np.concatenate([t.positions, gap]).transpose(1, 0, 2).reshape(-1, 2)
+        paths = paths.astype(np.float32)        # to 1e-7 of the span: far below a pixel
         _columns(self.paths, x=paths[:, 0], y=paths[:, 1])
         lo, hi = np.nanmin(joints, axis=0), np.nanmax(joints, axis=0)
         half = 0.55 * max(hi - lo) or 1.0
@@ -387,6 +389,16 @@ def _same(old, new) -> bool:
         return False
     return all(_same(a, b) if isinstance(a, (np.ndarray, list)) or isinstance(b, np.ndarray)
                else a == b for a, b in zip(old, new))
+
+
+def _drawn(curve: np.ndarray) -> list:
+    """A speed curve as the page draws it: a list in the message's text (an array is two
+    frames more of the message, each a task of the page's), to six significant digits of
+    its largest value (a few millionths of the plot's height)."""
+    finite = curve[np.isfinite(curve)]
+    scale = float(np.max(np.abs(finite))) if finite.size else 0.0
+    decimals = 5 - math.floor(math.log10(scale)) if scale > 0 else 6
+    return np.round(curve, decimals).tolist()
 
 
 def _span(axis, low: float, high: float, margin: float) -> None:

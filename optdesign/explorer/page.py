@@ -55,7 +55,7 @@ class Page:
 
     # ----------------------------------------------------------------- widgets
     def _build_widgets(self) -> None:
-        from optdesign.explorer.widgets import PromptSlider
+        from optdesign.explorer.widgets import PromptSlider, TextPane
 
         pn, s = self.pn, self.session
         self.lengths = {}
@@ -106,13 +106,13 @@ class Page:
                                        end=FRAMES - 1, value=0, interval=80, loop_policy="loop",
                                        width=560, css_classes=["explore-player"])
         self.angle.param.watch(lambda e: self._draw_frame(), "value")
-        self.headline = pn.pane.HTML("", sizing_mode="stretch_width",
-                                     css_classes=["explore-headline"])
-        self.message = pn.pane.HTML("", sizing_mode="stretch_width",
-                                    css_classes=["explore-message"])
-        self.table = pn.pane.HTML("", width=560, css_classes=["explore-table"])
-        self.binding = pn.pane.HTML("", sizing_mode="stretch_width",
-                                    css_classes=["explore-binding"])
+        self.headline = TextPane("", sizing_mode="stretch_width",
+                                 css_classes=["explore-headline"])
+        self.message = TextPane("", sizing_mode="stretch_width",
+                                css_classes=["explore-message"])
+        self.table = TextPane("", width=560, css_classes=["explore-table"])
+        self.binding = TextPane("", sizing_mode="stretch_width",
+                                css_classes=["explore-binding"])
 
     # ----------------------------------------------------------------- plots
     def _build_plots(self) -> None:

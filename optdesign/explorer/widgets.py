@@ -1,4 +1,5 @@
-"""The explorer's slider: Panel's editable float slider, answered as soon as it moves.
+"""The explorer's slider: Panel's editable float slider, answered as soon as it moves; and
+its text panes, whose new text is all a redraw sends of them.
 
 Panel waits 50 ms after a slider's value arrives from the browser before it runs the
 widget's callbacks (its ``_debounce``: changes arriving meanwhile are merged into one). On
@@ -29,6 +30,7 @@ from __future__ import annotations
 
 from contextlib import contextmanager
 
+from panel.pane import HTML
 from panel.widgets import EditableFloatSlider, FloatSlider
 
 
@@ -38,6 +40,9 @@ class _PromptFloatSlider(FloatSlider):
     page."""
 
     _debounce = 0
+    #: the page shows no busy indicator: Panel's count of busy events (a millisecond a
+    #: move) is kept for none
+    _busy__ignore = ["value", "value_throttled"]
 
     async def _change_coroutine(self, doc, event_id=None) -> None:
         from panel.io import hold
@@ -128,3 +133,12 @@ async def sockets_free(doc) -> None:
                 pass
         except Timeout:
             return
+
+
+class TextPane(HTML):
+    """Panel's HTML pane whose new text is all that is sent to its model when it changes
+    (Panel sets every property of the model again: about a millisecond a pane, two panes a
+    move)."""
+
+    def _update(self, ref, model) -> None:
+        model.text = self._transform_object(self.object)["object"]

@@ -8,8 +8,8 @@ import pytest
 pytest.importorskip("panel")
 
 from optdesign.explorer import widgets  # noqa: E402
-from optdesign.explorer.widgets import (PromptSlider, corked, send_at_once,  # noqa: E402
-                                        sockets_free)
+from optdesign.explorer.widgets import (PromptSlider, TextPane, corked,  # noqa: E402
+                                        send_at_once, sockets_free)
 
 
 def _page_showing(lock) -> SimpleNamespace:
@@ -25,6 +25,38 @@ def test_the_slider_is_panels_editable_slider_without_its_wait():
     assert w._slider_widget._debounce == 0
     w._slider.value = 56.2                   # a move of the handle reaches the widget's value
     assert w.value == 56.2 and w._value_edit.value == 56.2
+
+
+def test_a_move_is_not_counted_busy():
+    """The page shows no busy indicator: a move leaves Panel's busy count alone."""
+    from panel.io.state import state
+
+    w = PromptSlider(start=20, end=150, value=56.0, step=0.2)
+    seen = []
+    watcher = state.param.watch(lambda e: seen.append(e.new), "busy")
+    try:
+        w._slider._process_events({"value": 56.2})
+    finally:
+        state.param.unwatch(watcher)
+    assert w.value == 56.2 and seen == []
+
+
+def test_a_text_pane_sends_its_new_text_alone():
+    """What a redraw sends of a text pane: its text, as Panel's HTML pane renders it."""
+    import panel as pn
+    from bokeh.document import Document
+
+    text = "<b class='explore-delta'>δ = 0.376413</b> &amp; more"
+    pane, html = TextPane("", width=560), pn.pane.HTML(text, width=560)
+    doc = Document()
+    model = pane.get_root(doc)
+    doc.add_root(model)
+    events = []
+    doc.callbacks.on_change(events.append)
+    pane.object = text
+    pane._update(model.ref["id"], model)     # what a served page's redraw runs
+    assert [e.attr for e in events] == ["text"]
+    assert model.text == html.get_root(Document()).text
 
 
 def test_no_server_no_wait():

@@ -55,54 +55,58 @@ class Page:
 
     # ----------------------------------------------------------------- widgets
     def _build_widgets(self) -> None:
-        from optdesign.explorer.widgets import PromptSlider, TextPane
+        from optdesign.explorer.widgets import PromptDiscreteSlider, PromptSlider, TextPane
 
         pn, s = self.pn, self.session
         self.lengths = {}
         for name, lower, upper in s.lengths():
+            step = _step(upper - lower)
             w = PromptSlider(
-                name=f"{name} [mm]", start=lower, end=upper, fixed_start=lower,
-                fixed_end=upper, value=round(float(s.values[name]), 4),
-                step=_step(upper - lower),
-                width=CONTROLS_WIDTH - 20, css_classes=[f"explore-length-{name}"])
+                **_label(f"{name} [mm]"), start=lower, end=upper, fixed_start=lower,
+                fixed_end=upper, value=round(float(s.values[name]), 4), step=step,
+                format=_shown(step), width=CONTROLS_WIDTH - 20,
+                css_classes=[f"explore-length-{name}"])
             w.param.watch(lambda event, name=name: self._on_length(name, event.new), "value")
             self.lengths[name] = w
         key = s.problem.model.count_variable
         counts = s.counts()
         if len(counts) > 1:
-            self.count = pn.widgets.DiscreteSlider(name=key, options=counts,
-                                                   value=int(s.values[key]),
-                                                   width=CONTROLS_WIDTH - 20,
-                                                   css_classes=["explore-count"])
+            self.count = PromptDiscreteSlider(**_label(key), options=counts,
+                                              value=int(s.values[key]),
+                                              width=CONTROLS_WIDTH - 20,
+                                              css_classes=["explore-count"])
             self.count.param.watch(lambda e: self._on_length(key, e.new), "value")
         else:
-            self.count = pn.widgets.StaticText(name=key, value=f"{counts[0]} (fixed by the "
-                                                               f"file)")
+            self.count = pn.widgets.StaticText(**_label(key),
+                                               value=f"{counts[0]} (fixed by the file)")
         self.eccentricity = PromptSlider(
-            name="drawn at eccentricity e", start=0.05, end=1.0, fixed_end=1.0, step=0.01,
-            value=1.0, width=CONTROLS_WIDTH - 20, css_classes=["explore-eccentricity"])
+            **_label("drawn at eccentricity e"), start=0.05, end=1.0, fixed_end=1.0,
+            step=0.01, format=_shown(0.01), value=1.0, width=CONTROLS_WIDTH - 20,
+            css_classes=["explore-eccentricity"])
         self.eccentricity.param.watch(lambda e: self._act(s.set_eccentricity, e.new),
                                       "value")
         self.bounds = {}
         for b in s.bounds():
             unit = "" if b.unit in ("", "-") else f" [{b.unit}]"
             w = PromptSlider(
-                name=f"{b.label}{unit}", start=b.lower, end=b.upper,
-                value=float(b.value), step=b.step, width=CONTROLS_WIDTH - 20,
+                **_label(f"{b.label}{unit}"), start=b.lower, end=b.upper,
+                value=float(b.value), step=b.step, format=_shown(b.step),
+                width=CONTROLS_WIDTH - 20,
                 css_classes=[f"explore-bound-{b.key.replace('.', '-')}"])
             w.param.watch(lambda event, key=b.key: self._on_bound(key, event.new), "value")
             self.bounds[b.key] = w
-        self.reoptimise = pn.widgets.Button(name="re-optimise", button_type="primary",
+        primary = {"color" if "color" in pn.widgets.Button.param else "button_type": "primary"}
+        self.reoptimise = pn.widgets.Button(**_label("re-optimise"), **primary,
                                             css_classes=["explore-reoptimise"])
         self.reoptimise.on_click(lambda _: self._reoptimise())
-        self.follow = pn.widgets.Checkbox(name="follow: re-optimise when a bound moves",
+        self.follow = pn.widgets.Checkbox(**_label("follow: re-optimise when a bound moves"),
                                           css_classes=["explore-follow"])
-        self.save_as = pn.widgets.TextInput(name="save the design as", value="design.yaml",
-                                            width=CONTROLS_WIDTH - 20,
+        self.save_as = pn.widgets.TextInput(**_label("save the design as"),
+                                            value="design.yaml", width=CONTROLS_WIDTH - 20,
                                             css_classes=["explore-save-as"])
-        self.save = pn.widgets.Button(name="save", css_classes=["explore-save"])
+        self.save = pn.widgets.Button(**_label("save"), css_classes=["explore-save"])
         self.save.on_click(lambda _: self._save())
-        self.angle = pn.widgets.Player(name="crank angle (frame of one turn)", start=0,
+        self.angle = pn.widgets.Player(**_label("crank angle (frame of one turn)"), start=0,
                                        end=FRAMES - 1, value=0, interval=80, loop_policy="loop",
                                        width=560, css_classes=["explore-player"])
         self.angle.param.watch(lambda e: self._draw_frame(), "value")
@@ -440,3 +444,23 @@ def _table(shot) -> str:
     return (f"<table class='explore-figures' style='border-collapse:collapse;width:100%'>"
             f"<tr><th style='text-align:left'>figure (exact)</th><th style='text-align:right'>"
             f"value</th></tr>{body}</table>")
+
+def _label(text: str) -> dict:
+    """A widget's caption as a keyword: ``label`` where Panel has it (``name`` is deprecated
+    for it from Panel 1.9, as a button's ``button_type`` is for ``color``), ``name``
+    before."""
+    from panel.widgets import Widget
+
+    return {"label" if "label" in Widget.param else "name": text}
+
+
+def _shown(step: float) -> str:
+    """The number field's format beside a slider of ``step``: the step's decimals, then up
+    to four where a value lies between steps (one re-optimised or typed), so a value the
+    browser's arithmetic leaves at 57.00000000000001 reads 57.0; the value itself is kept
+    exact."""
+    decimals = max(0, -math.floor(math.log10(step) + 1e-9))
+    optional = max(0, 4 - decimals)
+    if decimals == 0:
+        return "0[.][" + "0" * optional + "]"
+    return "0." + "0" * decimals + (f"[{'0' * optional}]" if optional else "")

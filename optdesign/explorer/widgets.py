@@ -1,12 +1,13 @@
-"""The explorer's slider: Panel's editable float slider, answered as soon as it moves; and
-its text panes, whose new text is all a redraw sends of them.
+"""The explorer's sliders: Panel's editable float slider and discrete slider, answered as
+soon as they move; and its text panes, whose new text is all a redraw sends of them.
 
 Panel waits 50 ms after a slider's value arrives from the browser before it runs the
 widget's callbacks (its ``_debounce``: changes arriving meanwhile are merged into one). On
 the explorer's page that wait was a third of a move's round trip, and it merges nothing the
 server would not merge anyway: while a move is being evaluated, the values that arrive are
-merged into one change, and the next evaluation takes the newest. :class:`PromptSlider` runs
-its callbacks on the next turn of the server's loop instead.
+merged into one change, and the next evaluation takes the newest. :class:`PromptSlider` (a
+length, a bound, the drawn eccentricity) and :class:`PromptDiscreteSlider` (the count) run
+their callbacks on the next turn of the server's loop instead.
 
 One thing it waits for: the server's acknowledgement of the move (a message of three
 frames, each frame one turn of the loop) still being written to the page. Panel sends a
@@ -31,13 +32,13 @@ from __future__ import annotations
 from contextlib import contextmanager
 
 from panel.pane import HTML
-from panel.widgets import EditableFloatSlider, FloatSlider
+from panel.widgets import DiscreteSlider, EditableFloatSlider, FloatSlider, IntSlider
 
 
-class _PromptFloatSlider(FloatSlider):
-    """The slider part of :class:`PromptSlider`: a value from the browser is processed on
-    the next turn of the loop (no 50 ms wait), once no message is half-written to the
-    page."""
+class _Prompt:
+    """What makes a Panel slider prompt: a value from the browser is processed on the next
+    turn of the loop (no 50 ms wait), once no message is half-written to the page, and the
+    move's changes leave in one message."""
 
     _debounce = 0
     #: the page shows no busy indicator: Panel's count of busy events (a millisecond a
@@ -55,10 +56,29 @@ class _PromptFloatSlider(FloatSlider):
             await super()._change_coroutine(doc, event_id)
 
 
+class _PromptFloatSlider(_Prompt, FloatSlider):
+    """The slider part of :class:`PromptSlider`."""
+
+
+class _PromptIntSlider(_Prompt, IntSlider):
+    """The slider part of :class:`PromptDiscreteSlider`."""
+
+
 class PromptSlider(EditableFloatSlider):
     """An :class:`~panel.widgets.EditableFloatSlider` whose moves are answered at once."""
 
     _slider_widget = _PromptFloatSlider
+
+
+class PromptDiscreteSlider(DiscreteSlider):
+    """A :class:`~panel.widgets.DiscreteSlider` (the count's) whose moves are answered at
+    once."""
+
+    def _update_options(self, *events) -> None:
+        super()._update_options(*events)
+        # the slider over the options' indices Panel has just built: the same object,
+        # answered as PromptSlider's is (it adds no state of its own)
+        self._slider.__class__ = _PromptIntSlider
 
 
 #: the longest wait for a page's socket [s]: a page that stops reading holds a message

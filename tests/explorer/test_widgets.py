@@ -8,8 +8,8 @@ import pytest
 pytest.importorskip("panel")
 
 from optdesign.explorer import widgets  # noqa: E402
-from optdesign.explorer.widgets import (PromptSlider, TextPane, corked,  # noqa: E402
-                                        send_at_once, sockets_free)
+from optdesign.explorer.widgets import (PromptDiscreteSlider, PromptSlider,  # noqa: E402
+                                        TextPane, corked, send_at_once, sockets_free)
 
 
 def _page_showing(lock) -> SimpleNamespace:
@@ -25,6 +25,15 @@ def test_the_slider_is_panels_editable_slider_without_its_wait():
     assert w._slider_widget._debounce == 0
     w._slider.value = 56.2                   # a move of the handle reaches the widget's value
     assert w.value == 56.2 and w._value_edit.value == 56.2
+
+
+def test_the_count_slider_is_panels_discrete_slider_without_its_wait():
+    w = PromptDiscreteSlider(options=[4, 5, 6, 8], value=5)
+    assert w._slider._debounce == 0
+    w._slider.value = 3                      # the handle on the fourth option
+    assert w.value == 8
+    w.options = [4, 6]                       # Panel builds the slider anew: prompt still
+    assert w._slider._debounce == 0 and w.value == 4
 
 
 def test_a_move_is_not_counted_busy():

@@ -78,8 +78,11 @@ def serve(session, front, port: int, browser: bool = True) -> int:
     import panel as pn
 
     from optdesign.explorer.page import Page
+    from optdesign.explorer.widgets import send_at_once
 
     def app():
+        doc = pn.state.curdoc
+        pn.state.onload(lambda: send_at_once(doc))     # before the first move's reply
         return Page(session.fork(), front).layout
 
     url = f"http://{HOST}:{port}/"

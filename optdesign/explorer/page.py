@@ -55,64 +55,68 @@ class Page:
 
     # ----------------------------------------------------------------- widgets
     def _build_widgets(self) -> None:
-        from optdesign.explorer.widgets import PromptSlider
+        from optdesign.explorer.widgets import PromptDiscreteSlider, PromptSlider, TextPane
 
         pn, s = self.pn, self.session
         self.lengths = {}
         for name, lower, upper in s.lengths():
+            step = _step(upper - lower)
             w = PromptSlider(
-                name=f"{name} [mm]", start=lower, end=upper, fixed_start=lower,
-                fixed_end=upper, value=round(float(s.values[name]), 4),
-                step=_step(upper - lower),
-                width=CONTROLS_WIDTH - 20, css_classes=[f"explore-length-{name}"])
+                **_label(f"{name} [mm]"), start=lower, end=upper, fixed_start=lower,
+                fixed_end=upper, value=round(float(s.values[name]), 4), step=step,
+                format=_shown(step), width=CONTROLS_WIDTH - 20,
+                css_classes=[f"explore-length-{name}"])
             w.param.watch(lambda event, name=name: self._on_length(name, event.new), "value")
             self.lengths[name] = w
         key = s.problem.model.count_variable
         counts = s.counts()
         if len(counts) > 1:
-            self.count = pn.widgets.DiscreteSlider(name=key, options=counts,
-                                                   value=int(s.values[key]),
-                                                   width=CONTROLS_WIDTH - 20,
-                                                   css_classes=["explore-count"])
+            self.count = PromptDiscreteSlider(**_label(key), options=counts,
+                                              value=int(s.values[key]),
+                                              width=CONTROLS_WIDTH - 20,
+                                              css_classes=["explore-count"])
             self.count.param.watch(lambda e: self._on_length(key, e.new), "value")
         else:
-            self.count = pn.widgets.StaticText(name=key, value=f"{counts[0]} (fixed by the "
-                                                               f"file)")
+            self.count = pn.widgets.StaticText(**_label(key),
+                                               value=f"{counts[0]} (fixed by the file)")
         self.eccentricity = PromptSlider(
-            name="drawn at eccentricity e", start=0.05, end=1.0, fixed_end=1.0, step=0.01,
-            value=1.0, width=CONTROLS_WIDTH - 20, css_classes=["explore-eccentricity"])
+            **_label("drawn at eccentricity e"), start=0.05, end=1.0, fixed_end=1.0,
+            step=0.01, format=_shown(0.01), value=1.0, width=CONTROLS_WIDTH - 20,
+            css_classes=["explore-eccentricity"])
         self.eccentricity.param.watch(lambda e: self._act(s.set_eccentricity, e.new),
                                       "value")
         self.bounds = {}
         for b in s.bounds():
             unit = "" if b.unit in ("", "-") else f" [{b.unit}]"
             w = PromptSlider(
-                name=f"{b.label}{unit}", start=b.lower, end=b.upper,
-                value=float(b.value), step=b.step, width=CONTROLS_WIDTH - 20,
+                **_label(f"{b.label}{unit}"), start=b.lower, end=b.upper,
+                value=float(b.value), step=b.step, format=_shown(b.step),
+                width=CONTROLS_WIDTH - 20,
                 css_classes=[f"explore-bound-{b.key.replace('.', '-')}"])
             w.param.watch(lambda event, key=b.key: self._on_bound(key, event.new), "value")
             self.bounds[b.key] = w
-        self.reoptimise = pn.widgets.Button(name="re-optimise", button_type="primary",
+        primary = {"color" if "color" in pn.widgets.Button.param else "button_type": "primary"}
+        self.reoptimise = pn.widgets.Button(**_label("re-optimise"), **primary,
                                             css_classes=["explore-reoptimise"])
         self.reoptimise.on_click(lambda _: self._reoptimise())
-        self.follow = pn.widgets.Checkbox(name="follow: re-optimise when a bound moves",
+        self.follow = pn.widgets.Checkbox(**_label("follow: re-optimise when a bound moves"),
                                           css_classes=["explore-follow"])
-        self.save_as = pn.widgets.TextInput(name="save the design as", value="design.yaml",
-                                            width=CONTROLS_WIDTH - 20,
+        self.save_as = pn.widgets.TextInput(**_label("save the design as"),
+                                            value="design.yaml", width=CONTROLS_WIDTH - 20,
                                             css_classes=["explore-save-as"])
-        self.save = pn.widgets.Button(name="save", css_classes=["explore-save"])
+        self.save = pn.widgets.Button(**_label("save"), css_classes=["explore-save"])
         self.save.on_click(lambda _: self._save())
-        self.angle = pn.widgets.Player(name="crank angle (frame of one turn)", start=0,
+        self.angle = pn.widgets.Player(**_label("crank angle (frame of one turn)"), start=0,
                                        end=FRAMES - 1, value=0, interval=80, loop_policy="loop",
                                        width=560, css_classes=["explore-player"])
         self.angle.param.watch(lambda e: self._draw_frame(), "value")
-        self.headline = pn.pane.HTML("", sizing_mode="stretch_width",
-                                     css_classes=["explore-headline"])
-        self.message = pn.pane.HTML("", sizing_mode="stretch_width",
-                                    css_classes=["explore-message"])
-        self.table = pn.pane.HTML("", width=560, css_classes=["explore-table"])
-        self.binding = pn.pane.HTML("", sizing_mode="stretch_width",
-                                    css_classes=["explore-binding"])
+        self.headline = TextPane("", sizing_mode="stretch_width",
+                                 css_classes=["explore-headline"])
+        self.message = TextPane("", sizing_mode="stretch_width",
+                                css_classes=["explore-message"])
+        self.table = TextPane("", width=560, css_classes=["explore-table"])
+        self.binding = TextPane("", sizing_mode="stretch_width",
+                                css_classes=["explore-binding"])
 
     # ----------------------------------------------------------------- plots
     def _build_plots(self) -> None:
@@ -310,17 +314,18 @@ class Page:
                 source.data = {k: [] for k in source.data}
             return
         t = shot.turn
-        # the crank angles as a list (sent as text, a few bytes each); the speeds as arrays
-        # (sent as binary): every array is a message of its own to the page
+        # the crank angles and the speeds as lists, in the message's text (the angles only
+        # when the number of curves changes); the joints' paths as two arrays, sent as
+        # binary (every array is two frames more of the message, each a task of the page's)
         deg = np.append(t.phi_deg, 360.0).tolist()
-        self.members.data = dict(
-            xs=[deg] * len(t.speeds), ys=[np.append(v, v[0]) for v in t.speeds],
-            colour=[MEMBER_COLOURS[k % len(MEMBER_COLOURS)] for k in range(len(t.speeds))])
+        _columns(self.members, xs=[deg] * len(t.speeds),
+                 ys=[_drawn(np.append(v, v[0])) for v in t.speeds],
+                 colour=[MEMBER_COLOURS[k % len(MEMBER_COLOURS)] for k in range(len(t.speeds))])
         shown = t.outputs or (("output", t.output),)
-        self.outputs.data = dict(
-            xs=[deg] * len(shown), ys=[np.append(v, v[0]) for _, v in shown],
-            colour=[OUTPUT_COLOURS[i % len(OUTPUT_COLOURS)] for i in range(len(shown))],
-            label=[label for label, _ in shown])
+        _columns(self.outputs, xs=[deg] * len(shown),
+                 ys=[_drawn(np.append(v, v[0])) for _, v in shown],
+                 colour=[OUTPUT_COLOURS[i % len(OUTPUT_COLOURS)] for i in range(len(shown))],
+                 label=[label for label, _ in shown])
         # the speeds' span set here, as the page would fit it (5 % margins), so the page
         # neither fits it nor sends the fitted span back
         curves = np.concatenate([t.speeds.ravel(), *(v for _, v in shown)])
@@ -329,7 +334,8 @@ class Page:
         joints = t.positions.reshape(-1, 2)
         gap = np.full((1, len(t.names), 2), np.nan)             # (frames + 1, joints, 2)
         paths = np.concatenate([t.positions, gap]).transpose(1, 0, 2).reshape(-1, 2)
-        self.paths.data = dict(x=paths[:, 0], y=paths[:, 1])
+        paths = paths.astype(np.float32)        # to 1e-7 of the span: far below a pixel
+        _columns(self.paths, x=paths[:, 0], y=paths[:, 1])
         lo, hi = np.nanmin(joints, axis=0), np.nanmax(joints, axis=0)
         half = 0.55 * max(hi - lo) or 1.0
         centre = (lo + hi) / 2
@@ -350,11 +356,10 @@ class Page:
         b = [at[index[link[1]]] for link in t.links]
         a, b = np.array(a), np.array(b)
         # a few numbers each: lists, in the message's text
-        self.links.data = dict(x0=a[:, 0].tolist(), y0=a[:, 1].tolist(), x1=b[:, 0].tolist(),
-                               y1=b[:, 1].tolist(),
-                               colour=[ROLE_COLOURS[link[2]] for link in t.links],
-                               width=[ROLE_WIDTHS[link[2]] for link in t.links])
-        self.joints.data = dict(x=at[:, 0].tolist(), y=at[:, 1].tolist(), name=list(t.names))
+        _columns(self.links, x0=a[:, 0].tolist(), y0=a[:, 1].tolist(), x1=b[:, 0].tolist(),
+                 y1=b[:, 1].tolist(), colour=[ROLE_COLOURS[link[2]] for link in t.links],
+                 width=[ROLE_WIDTHS[link[2]] for link in t.links])
+        _columns(self.joints, x=at[:, 0].tolist(), y=at[:, 1].tolist(), name=list(t.names))
         self.cursor.location = float(t.phi_deg[frame])
 
 
@@ -362,6 +367,42 @@ def _internal(exc: Exception) -> str:
     """The page's line for a fault that is a bug, as the command line words it."""
     return (f"internal error ({type(exc).__name__}: {str(exc)[:200]}); please report it with "
             f"the problem file")
+
+
+def _columns(source, **columns) -> None:
+    """Put ``columns`` in the ColumnDataSource ``source``, sending the page only those that
+    changed (a move changes the curves, not the crank angles, colours or names); all of them
+    when the number of rows changes."""
+    old = source.data
+    rows = {len(v) for v in columns.values()}
+    if set(old) != set(columns) or rows != {len(v) for v in old.values()}:
+        source.data = columns
+        return
+    changed = {k: v for k, v in columns.items() if not _same(old[k], v)}
+    if changed:
+        source.data.update(changed)
+
+
+def _same(old, new) -> bool:
+    """Whether two columns hold the same values (NaN equal to NaN)."""
+    if isinstance(old, np.ndarray) or isinstance(new, np.ndarray):
+        old, new = np.asarray(old), np.asarray(new)
+        return old.shape == new.shape and old.dtype == new.dtype and bool(
+            np.array_equal(old, new, equal_nan=old.dtype.kind == "f"))
+    if len(old) != len(new):
+        return False
+    return all(_same(a, b) if isinstance(a, (np.ndarray, list)) or isinstance(b, np.ndarray)
+               else a == b for a, b in zip(old, new))
+
+
+def _drawn(curve: np.ndarray) -> list:
+    """A speed curve as the page draws it: a list in the message's text (an array is two
+    frames more of the message, each a task of the page's), to six significant digits of
+    its largest value (a few millionths of the plot's height)."""
+    finite = curve[np.isfinite(curve)]
+    scale = float(np.max(np.abs(finite))) if finite.size else 0.0
+    decimals = 5 - math.floor(math.log10(scale)) if scale > 0 else 6
+    return np.round(curve, decimals).tolist()
 
 
 def _span(axis, low: float, high: float, margin: float) -> None:
@@ -403,3 +444,23 @@ def _table(shot) -> str:
     return (f"<table class='explore-figures' style='border-collapse:collapse;width:100%'>"
             f"<tr><th style='text-align:left'>figure (exact)</th><th style='text-align:right'>"
             f"value</th></tr>{body}</table>")
+
+def _label(text: str) -> dict:
+    """A widget's caption as a keyword: ``label`` where Panel has it (``name`` is deprecated
+    for it from Panel 1.9, as a button's ``button_type`` is for ``color``), ``name``
+    before."""
+    from panel.widgets import Widget
+
+    return {"label" if "label" in Widget.param else "name": text}
+
+
+def _shown(step: float) -> str:
+    """The number field's format beside a slider of ``step``: the step's decimals, then up
+    to four where a value lies between steps (one re-optimised or typed), so a value the
+    browser's arithmetic leaves at 57.00000000000001 reads 57.0; the value itself is kept
+    exact."""
+    decimals = max(0, -math.floor(math.log10(step) + 1e-9))
+    optional = max(0, 4 - decimals)
+    if decimals == 0:
+        return "0[.][" + "0" * optional + "]"
+    return "0." + "0" * decimals + (f"[{'0' * optional}]" if optional else "")

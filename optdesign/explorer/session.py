@@ -51,23 +51,25 @@ class Session:
     # ----------------------------------------------------------------- opening
     @classmethod
     def open(cls, problem, design=None, point: int | None = None) -> "Session":
-        """A session on ``problem`` (a path, a mapping with the file's keys, or a Problem
-        whose file is found by its name from here), starting from ``design``: None (the file's own), a mapping of
-        design keys, or a path to a result.json, a design.yaml or a front's pareto.csv (with
-        ``point``). Every value is checked by the loader's rules; a fault raises a
+        """A session on ``problem`` (a path, a mapping with the file's keys, or a Problem),
+        starting from ``design``: None (the file's own), a mapping of design keys, or a path
+        to a result.json, a design.yaml or a front's pareto.csv (with ``point``). Every value
+        is checked by the loader's rules; a fault raises a
         :class:`~optdesign.errors.ProblemError` or :class:`~optdesign.errors.UsageError`
-        naming the file and key."""
+        naming the file and key.
+
+        A Problem keeps its file's name only, not the file's mapping the explorer moves
+        bounds in: its file is read when found from here and it loads to the same problem,
+        else the mapping is written anew from the Problem (:func:`mapping_of`)."""
         from optdesign.problem.loader import Problem, load_problem, problem_from_dict
         from optdesign.problem.yaml_text import parse, read_text
 
         if isinstance(problem, Problem):
-            path = Path(problem.source)
-            if not path.is_file():
-                raise ProblemError(f"{problem.source}: the explorer moves bounds in the "
-                                   f"problem file's keys: give the file's path or its "
-                                   f"mapping (a Problem keeps only its file's name)")
-            problem = path
-        if isinstance(problem, Mapping):
+            data = _file_of(problem)
+            if data is None:
+                data = mapping_of(problem)
+            loaded = problem_from_dict(data, where=problem.source)
+        elif isinstance(problem, Mapping):
             data = dict(problem)
             loaded = problem_from_dict(data, where="<dict>")
         elif isinstance(problem, (str, Path)):
@@ -199,3 +201,81 @@ class Session:
                   f"({shot.delta_text}). Runnable as it is,\n"
                   f"# e.g. optdesign analyze design.yaml, or --design design.yaml.\n")
         return atomic_write_text(Path(path), header + design_text(self.data, record))
+
+
+def _file_of(problem) -> dict | None:
+    """The mapping of ``problem``'s file when it is found from here (its ``source``) and
+    loads to the same problem (a Problem changed in code does not), else None."""
+    from optdesign.problem.loader import load_problem
+    from optdesign.problem.yaml_text import parse, read_text
+
+    path = Path(problem.source)
+    if not path.is_file():
+        return None
+    try:
+        same = load_problem(path) == problem
+    except ProblemError:
+        return None
+    return parse(read_text(path), str(path)) if same else None
+
+
+def mapping_of(problem) -> dict:
+    """A problem file's mapping that the loader reads back to ``problem`` (every key
+    written out, defaults too): the mapping the explorer moves bounds in and saves a design
+    with, for a Problem whose file is not at hand. A ProblemError when ``problem`` has
+    what a mapping written here cannot hold (a ``pareto:``, ``tolerances:``, ``driveline:``
+    or ``dynamics:`` section, a bound held for a front's axis) and its file is not found."""
+    from dataclasses import asdict, fields
+
+    from optdesign.problem.loader import Constraints, problem_from_dict
+
+    def unavailable(what: str) -> ProblemError:
+        return ProblemError(f"{problem.source}: the explorer moves bounds in the problem "
+                            f"file's keys, and this Problem's file is not found from here "
+                            f"({what}): give the file's path or its mapping")
+
+    if problem.sections or problem.constraints.extra:
+        raise unavailable("its " + ", ".join(f"{k}:" for k in (
+            *problem.sections, *problem.constraints.extra)) + " cannot be written anew")
+    c = problem.constraints
+    constraints = {f.name: getattr(c, f.name) for f in fields(Constraints)
+                   if f.name not in ("own", "extra", "bounds", "spelled")}
+    constraints |= dict(c.own)
+    for b in c.bounds:
+        constraints[b.name] = {side: value for side, value in (("lower", b.lower),
+                                                                 ("upper", b.upper))
+                               if math.isfinite(value)}
+        if b.at is not None:
+            constraints[b.name]["at"] = b.at
+    if not any(b.name == "transmission_angle" for b in c.bounds):
+        constraints["min_transmission_angle_deg"] = 0.0       # none held
+    if problem.eccentricity_range is not None:
+        lower, upper = problem.eccentricity_range
+        regulation = {"eccentricity": {"lower": lower, "upper": upper}}
+    else:
+        regulation = {"eccentricity": list(problem.eccentricities)}
+    data = {"name": problem.name, "mechanism": problem.mechanism,
+            "input_speed": problem.input_speed, "stroke": problem.stroke,
+            "design": {k: _raw(v) for k, v in problem.design.items()},
+            "options": dict(problem.options), "constraints": constraints,
+            "objective": asdict(problem.objective), "regulation": regulation,
+            "solver": asdict(problem.solver)}
+    try:
+        same = problem_from_dict(data, where=problem.source) == problem
+    except ProblemError:
+        same = False
+    if not same:
+        raise unavailable("it does not read back from a mapping written anew")
+    return data
+
+
+def _raw(v) -> float | dict:
+    """A design key as a problem file writes it."""
+    if v.value is not None:
+        return v.value
+    if v.choices is not None:
+        return {"choices": list(v.choices)}
+    out = {"lower": v.lower, "upper": v.upper}
+    if v.initial is not None:
+        out["initial"] = v.initial
+    return out

@@ -114,6 +114,9 @@ def test_the_page_follows_the_exact_evaluator_and_the_solver(served, browser, tm
         time.sleep(0.05)
     moved = start | {"l3": _value(page, "l3")}
     assert moved["l3"] == pytest.approx(57.0, abs=1e-9)
+    # the number field shows the step's decimals, whatever float noise the browser's
+    # arithmetic left in the value (57.00000000000001 overflowed the field)
+    assert page.locator(".explore-length-l3 input").first.input_value() == "57.0"
     expected = _expected_delta(moved)
     assert _wait_text(page, ".explore-delta", expected) == expected
     from optdesign import load_problem

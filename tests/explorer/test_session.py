@@ -143,3 +143,48 @@ def test_a_design_file_opens_the_session(tmp_path):
     with pytest.raises(UsageError, match="has no design object"):
         (tmp_path / "x.json").write_text("{}")
         Session.open(DISC, tmp_path / "x.json")
+
+
+def test_a_problem_object_opens_without_its_file(tmp_path, monkeypatch):
+    """A Problem keeps only its file's name: from a folder where that name is no file, the
+    mapping is written anew from the Problem and reads back to it; bounds move, the figures
+    are analyze's, and a saved design runs as it is."""
+    from optdesign import analyze, explore, load_problem
+
+    problem = load_problem(DISC)
+    monkeypatch.chdir(tmp_path)                 # the file's name is no file here
+    session = Session.open(problem)
+    assert session.problem == problem
+    session.set("l3", 55.5)
+    assert session.evaluate().delta_text == analyze(problem, session.values).ripples() \
+        .worst.text(6)
+    assert "constraints.min_pin_radius" in [b.key for b in session.bounds()]
+    session.set_bound("constraints.min_pin_radius", 120)
+    assert session.problem.constraints.own["min_pin_radius"] == 120
+    path = session.save(tmp_path / "design.yaml")
+    code, out = run_main(["analyze", path, "--json"])           # runnable as it is
+    assert code == 0 and json.loads(out)["design"]["l3"] == 55.5
+    assert explore(problem) is not None         # the notebook's widget, from the Problem
+
+
+def test_a_problem_changed_in_code_is_explored_as_changed():
+    """The file is found, but the Problem was changed since: the explorer shows the Problem,
+    not the file."""
+    from optdesign import load_problem
+
+    problem = load_problem(DISC).with_bounds(l3=(30, 90))
+    session = Session.open(problem)
+    assert ("l3", 30, 90) in session.lengths() and session.problem == problem
+
+
+def test_a_problem_with_a_section_needs_its_file(tmp_path, monkeypatch):
+    from optdesign import load_problem
+
+    problem = load_problem(ROOT / "problems" / "sharkov2022_disc_tolerance.yaml")
+    monkeypatch.chdir(ROOT / "problems")        # its name is its file here: read
+    assert Session.open(problem).problem == problem
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ProblemError, match=r"sharkov2022_disc_tolerance.yaml: the explorer "
+                       r"moves bounds in the problem file's keys, and this Problem's file is "
+                       r"not found from here \(its tolerances: cannot be written anew\)"):
+        Session.open(problem)

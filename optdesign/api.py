@@ -222,9 +222,10 @@ def explore(problem, design=None, front=None):
     every constraint's margin; re-optimise (IPOPT warm-started from the design shown),
     follow, save.
 
-    ``problem``: a path or a mapping with the file's keys (its bounds are moved in that
-    mapping and loaded again by the loader's rules; a Problem only when its file is found
-    by its name from the working folder).
+    ``problem``: a path, a mapping with the file's keys (its bounds are moved in that
+    mapping and loaded again by the loader's rules), or a Problem (its file's mapping when
+    the file is found and loads to the same problem, else the mapping written anew from
+    the Problem: docs/explorer.md).
     ``design``: None (the file's own), a mapping of design keys (a :class:`SolveResult`'s
     ``.design``), or a result.json / design.yaml path. ``front``: the folder of a finished
     ``pareto`` run, its points drawn and loadable. Returns the Panel layout; displayed as a

@@ -445,6 +445,7 @@ def _table(shot) -> str:
             f"<tr><th style='text-align:left'>figure (exact)</th><th style='text-align:right'>"
             f"value</th></tr>{body}</table>")
 
+
 def _label(text: str) -> dict:
     """A widget's caption as a keyword: ``label`` where Panel has it (``name`` is deprecated
     for it from Panel 1.9, as a button's ``button_type`` is for ``color``), ``name``

@@ -227,7 +227,7 @@ def mapping_of(problem) -> dict:
     or ``dynamics:`` section, a bound held for a front's axis) and its file is not found."""
     from dataclasses import asdict, fields
 
-    from optdesign.problem.loader import Constraints, problem_from_dict
+    from optdesign.problem.loader import Constraints, problem_from_dict, raw_variable
 
     def unavailable(what: str) -> ProblemError:
         return ProblemError(f"{problem.source}: the explorer moves bounds in the problem "
@@ -256,7 +256,7 @@ def mapping_of(problem) -> dict:
         regulation = {"eccentricity": list(problem.eccentricities)}
     data = {"name": problem.name, "mechanism": problem.mechanism,
             "input_speed": problem.input_speed, "stroke": problem.stroke,
-            "design": {k: _raw(v) for k, v in problem.design.items()},
+            "design": {k: raw_variable(v) for k, v in problem.design.items()},
             "options": dict(problem.options), "constraints": constraints,
             "objective": asdict(problem.objective), "regulation": regulation,
             "solver": asdict(problem.solver)}
@@ -267,15 +267,3 @@ def mapping_of(problem) -> dict:
     if not same:
         raise unavailable("it does not read back from a mapping written anew")
     return data
-
-
-def _raw(v) -> float | dict:
-    """A design key as a problem file writes it."""
-    if v.value is not None:
-        return v.value
-    if v.choices is not None:
-        return {"choices": list(v.choices)}
-    out = {"lower": v.lower, "upper": v.upper}
-    if v.initial is not None:
-        out["initial"] = v.initial
-    return out

@@ -435,7 +435,7 @@ class Problem:
         ``{lower, upper}`` or ``{choices: [...]}``), then checked as a file is. Raises
         :class:`ProblemError` naming the key."""
         r = Reader(self.source)
-        raw = {k: _raw_variable(v) for k, v in self.design.items()} | changes
+        raw = {k: raw_variable(v) for k, v in self.design.items()} | changes
         problem = replace(self, design=_read_design(r, {"design": raw}, self.model))
         return _checked_variant(r, problem)
 
@@ -577,7 +577,7 @@ def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "pro
     return problem
 
 
-def _raw_variable(v: Variable):
+def raw_variable(v: Variable):
     """A design key as a problem file writes it."""
     if v.value is not None:
         return v.value

@@ -530,12 +530,14 @@ def workers_for(problem) -> int:
 
 def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
                 workers: int | None = None, neighbours: list[dict] = (),
-                explain: bool = True) -> PhaseResult:
+                explain: bool = True, sensitivities: bool = False) -> PhaseResult:
     """Best verified optimum of one phase count: screen, then polish the best basins (in
     ``workers`` processes at once; default :func:`workers_for`; 1 with a given ``solver``,
     whose built NLPs are kept for re-use). ``neighbours``: optima of other phase counts,
     screened with the box (continuation: the optimum of n - 1 often lies in the best basin
-    of n, and ranks first when it does).
+    of n, and ranks first when it does). ``sensitivities``: the optimum's block computed
+    here, on the evaluation its polish verified (a solve of one count; otherwise
+    :func:`summarized` computes the answer's alone).
 
     The verdict is a claim with its evidence. The design the file gives (its fixed and
     initial values) is a candidate as it is, so the answer is never worse than it. With
@@ -599,7 +601,7 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
         work = _from_nominal_optima(problem, count, solver, work, screening.seeds)
     result.timings = solver.timings.to_dict()
     if work.best is not None:
-        return _fill(result, problem, work.best)
+        return _fill(result, problem, work.best, sensitivities)
     if not screening.seeds:
         result.status, result.binding = "infeasible", "assembly"
         result.message = (f"no design within the bounds assembles at every listed "
@@ -900,7 +902,8 @@ def _fixed_infeasible(problem, count: int) -> PhaseResult | None:
                                + (f" ({ver.message})" if ver.message else ""))
 
 
-def _fill(result: PhaseResult, problem, outcome: Outcome) -> PhaseResult:
+def _fill(result: PhaseResult, problem, outcome: Outcome,
+          sensitivities: bool = False) -> PhaseResult:
     ver, values = outcome.verification, outcome.values
     design = {k: float(values[k]) for k in problem.model.lengths}
     design[problem.model.count_variable] = result.count
@@ -921,6 +924,8 @@ def _fill(result: PhaseResult, problem, outcome: Outcome) -> PhaseResult:
         result.worst_case_min_transmission_angle_deg = angle.value
         result.worst_case_quantities = {case.quantity: case.value for case in bounded}
     result.active = outcome.record.active
+    if sensitivities:           # on the evaluation at hand (it may come from a forked polish)
+        result.sensitivities = sensitivity_record(problem, design, ver.evaluation)
     result.quantities = design_quantities(problem, _every_quantity_searched(problem,
                                                                             ver.evaluation))
     result.message = ""
@@ -947,9 +952,12 @@ def solve(problem, progress=None) -> SolveResult:
     """Solve the problem for every admissible phase count and pick the best verified one."""
     t0 = time.perf_counter()
     per_phase = []
-    for n in problem.counts():
+    counts = problem.counts()
+    for n in counts:
         neighbours = [p.design for p in per_phase[-1:] if p.status == "optimal"]
-        per_phase.append(solve_phase(problem, n, neighbours=neighbours))
+        # one count is the answer if any is: its sensitivities on its own evaluation
+        per_phase.append(solve_phase(problem, n, neighbours=neighbours,
+                                     sensitivities=len(counts) == 1))
         if progress:
             progress()
     return summarized(problem, per_phase, t0)
@@ -975,7 +983,7 @@ def summarized(problem, per_phase: list[PhaseResult], t0: float) -> SolveResult:
         timings.add(Timings(**p.timings) if p.timings else Timings())
     with timings.stage("verification"):
         accuracy = solve_accuracy(problem, best)        # inside solve_time_s: part of the solve
-        if best is not None:        # the answer's alone: the other counts' stay empty
+        if best is not None and not best.sensitivities:     # the answer's alone
             best.sensitivities = sensitivity_record(problem, best.design)
     return SolveResult(
         name=problem.name, status=status,

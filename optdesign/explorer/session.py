@@ -68,7 +68,7 @@ class Session:
             data = _file_of(problem)
             if data is None:
                 data = mapping_of(problem)
-            loaded = problem_from_dict(data, where=problem.source)
+            loaded = problem            # each of the two has read ``data`` back to it
         elif isinstance(problem, Mapping):
             data = dict(problem)
             loaded = problem_from_dict(data, where="<dict>")

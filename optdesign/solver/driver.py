@@ -372,10 +372,12 @@ class _Polishing:
         self.polished = 0
         self.improved_at = 0          # the polish that last improved on the best
 
-    def polish(self, values: dict) -> Outcome:
+    def polish(self, values: dict, ver: Verification | None = None) -> Outcome:
+        """IPOPT from ``values`` (its start's check ``ver``, when done already), recorded."""
         self.solver.avoid = [o.values for o in self.optima]
         try:
-            outcome = self.solver.solve_from(dict(values), secondary=self.best is not None)
+            outcome = self.solver.solve_from(dict(values), ver=ver,
+                                             secondary=self.best is not None)
         finally:
             self.solver.avoid = []
         return self.record(outcome)
@@ -424,18 +426,24 @@ class _Polishing:
         s = self.problem.solver
         seeds = list(seeds)
         together = min(s.basins, s.starts, len(seeds), self.workers)
-        if together > 1:        # the best basins at once, one process each
+        if together > 1:        # the best basins at once: the first here, each other in a fork
             # built here first: the forked processes inherit it (built.py), and the
-            # polishes after theirs run on it in this one
+            # polishes after theirs run on it in this one; so do the exact evaluator's
+            # functions, which the first start's check builds
             nlp = self.solver.nlp([()])
             with self.solver.timings.stage("build"):
                 nlp.solver(s.hessian)
-            runs = _in_parallel(self.problem, self.count, [c.values for c in seeds[:together]])
-            for outcome, timings in runs:
+            first = self.solver.verify(self.problem, seeds[0].values, search=False)
+            before = replace(self.solver.timings)
+            runs = _in_parallel(self.problem, self.count, [c.values for c in seeds[1:together]],
+                                lambda: self.polish(seeds[0].values, first))
+            mine = self.solver.timings
+            for outcome, _ in runs:
                 self.record(outcome)
-            for stage in ("build", "ipopt", "verification"):
-                setattr(self.solver.timings, stage, getattr(self.solver.timings, stage) +
-                        max(getattr(t, stage) for _, t in runs))
+            for stage in ("build", "ipopt", "verification"):   # the processes ran at once
+                setattr(mine, stage, getattr(before, stage) + max(
+                    getattr(t, stage) - getattr(before, stage) if t is mine else
+                    getattr(t, stage) for t in [mine] + [t for _, t in runs]))
             seeds = seeds[together:]
         for seed in seeds:
             if self.polished >= s.starts:
@@ -486,10 +494,11 @@ def _as_found(outcome: Outcome) -> Outcome:
     return Outcome(record, outcome.verification, dict(outcome.values), None)
 
 
-def _in_parallel(problem, count: int, starts: list[dict]) -> list[tuple[Outcome, Timings]]:
-    """Polish each start in a process of its own (forked: nothing to import again; each
-    builds its NLP, a fraction of a second; each ends if this process dies); the outcomes
-    and each process's stage times."""
+def _in_parallel(problem, count: int, starts: list[dict],
+                 here) -> list[tuple[Outcome, Timings]]:
+    """Polish each start in a process of its own (forked: nothing to import again, and the
+    NLP this process built is inherited; each ends if this process dies) while this process
+    runs ``here()`` (its own polish); the forks' outcomes and stage times."""
     import multiprocessing as mp
     import os
     from concurrent.futures import ProcessPoolExecutor
@@ -498,8 +507,8 @@ def _in_parallel(problem, count: int, starts: list[dict]) -> list[tuple[Outcome,
                                initializer=die_with_parent, initargs=(os.getpid(),))
     try:
         with signals_held():             # the workers are forked as the jobs are handed out
-            pending = pool.map(_polish_alone, [(problem, count, v, i > 0)
-                                               for i, v in enumerate(starts)])
+            pending = pool.map(_polish_alone, [(problem, count, v) for v in starts])
+        here()
         outcomes = list(pending)
     except BaseException:       # Ctrl-C (the workers ignore it) or an error: end them now,
         for proc in list((getattr(pool, "_processes", None) or {}).values()):
@@ -511,9 +520,10 @@ def _in_parallel(problem, count: int, starts: list[dict]) -> list[tuple[Outcome,
 
 
 def _polish_alone(job) -> tuple[Outcome, Timings]:
-    problem, count, values, secondary = job
+    """A further basin's polish (``secondary``: with a budget) in a forked process."""
+    problem, count, values = job
     solver = PhaseSolver(problem, count)
-    return solver.solve_from(dict(values), secondary=secondary), solver.timings
+    return solver.solve_from(dict(values), secondary=True), solver.timings
 
 
 def workers_for(problem) -> int:

@@ -56,7 +56,7 @@ def test_a_copy_sent_to_a_forked_polish_has_the_same_key():
     the problem: the forked process finds the NLP it inherited."""
     for problem in (problem_from_dict(file_data(VERGOV)),
                     load_problem(ROOT / "problems" / "free_design.yaml")):
-        job = (problem, 3, problem.start_values(), False)       # driver._in_parallel's
+        job = (problem, 3, problem.start_values())       # driver._in_parallel's
         copy, count, *_ = pickle.loads(pickle.dumps(job))
         assert built.key_of(copy, count) == built.key_of(problem, 3)
         again = pickle.loads(pickle.dumps(copy))
@@ -116,3 +116,30 @@ def test_two_threads_never_share_an_nlp(fresh):
     thread.start()
     thread.join()
     assert theirs[0] is not mine and built.kept(problem, 3) is mine
+
+
+def test_the_best_basin_is_polished_here_the_next_in_a_fork(fresh, monkeypatch, tmp_path):
+    """Two basins at once: the best-ranked in the solving process (its start checked here
+    first, so the fork inherits the evaluator's functions too), the other in one forked
+    process; the same answer as the NLPs kept from a solve before."""
+    import os
+
+    log = tmp_path / "polishes"
+    solve_from = driver.PhaseSolver.solve_from
+
+    def logged(self, values, *args, **kwargs):
+        with open(log, "a") as f:           # from the forked polish as well
+            f.write(f"{os.getpid()} {kwargs.get('secondary', False)}\n")
+        return solve_from(self, values, *args, **kwargs)
+
+    monkeypatch.setattr(driver.PhaseSolver, "solve_from", logged)
+    data = file_data(ROOT / "problems" / "sharkov2022_disc.yaml")
+    data.setdefault("solver", {})["workers"] = 2
+    disc = problem_from_dict(data)
+    result = solve(disc)
+    polishes = sorted(line.split() for line in log.read_text().splitlines())  # any order
+    assert result.per_phase[0].screening["polished"] == 2 and len(polishes) == 2
+    here = [secondary for pid, secondary in polishes if pid == str(os.getpid())]
+    forked = [secondary for pid, secondary in polishes if pid != str(os.getpid())]
+    assert here == ["False"] and forked == ["True"]
+    assert answer(solve(disc)) == answer(result)

@@ -176,3 +176,32 @@ def test_an_output_at_rest_is_no_kink():
     values = problem.start_values() | {"r1": 39.45, "a": 50.0, "R1": 250.0, "freewheels": 2}
     s = assert_matches_central(problem, values)
     assert s.delta == pytest.approx(2.0) and not s.kink
+
+
+@pytest.mark.parametrize("mechanism, count", [("fourbar_converter", 6), ("slotted_lever", 3),
+                                              ("pulse_reducer", 4)])
+def test_a_chain_s_gradients_come_from_its_own_function_bit_for_bit(mechanism, count):
+    """The gradients are taken on chain k's own function (the solve's NLP built it): the same
+    figures, to the bit, as on chain k of the mechanism's whole kinematics."""
+    import casadi as ca
+
+    from optdesign.evaluation.sensitivity import _gradient_function
+    from optdesign.mechanisms import get_mechanism
+
+    model = get_mechanism(mechanism)
+    options = tuple(sorted(model.default_options().items()))
+    start = {k: v["initial"] if isinstance(v, dict) else v
+             for k, v in model.starter["design"].items()}
+    rng = np.random.default_rng(3)
+    phi, p = ca.SX.sym("phi"), ca.SX.sym("p", len(model.lengths))
+    for k in range(count):
+        whole = [v[k] for v in model.kinematics(count, options).call([phi, p], True, False)]
+        theta, dtheta, _, cos_mu = whole
+        reference = ca.Function("whole", [phi, p], whole + [
+            ca.jacobian(theta, p), ca.jacobian(dtheta, p), ca.jacobian(cos_mu, p)])
+        for _ in range(3):
+            angles = ca.DM(rng.uniform(0.0, 2 * np.pi, 5)).T
+            lengths = ca.DM([start[n] * rng.uniform(0.98, 1.02) for n in model.lengths])
+            got = _gradient_function(mechanism, count, options, k)(angles, lengths)
+            for a, b in zip(got, reference(angles, lengths)):
+                assert np.array_equal(np.array(a), np.array(b), equal_nan=True)

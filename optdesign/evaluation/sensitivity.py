@@ -257,12 +257,13 @@ def _check_located(found: float, evaluated: float, what: str, where: str, kinks:
 @lru_cache(maxsize=256)
 def _gradient_function(mechanism: str, count: int, options: tuple, k: int) -> ca.Function:
     """(phi, p) -> θ_k, dθ_k/dφ, d²θ_k/dφ², cos μ_k and the gradients of θ_k, dθ_k/dφ and
-    cos μ_k with respect to p: CasADi's symbolic derivatives of the mechanism's one function,
-    chain k alone (a point needs one or two chains: the cost stays linear in n)."""
+    cos μ_k with respect to p: CasADi's symbolic derivatives of chain k's own function
+    (:meth:`~optdesign.mechanisms.base.Mechanism.chain`, which the solve's NLP built already:
+    the nodes of chain k alone, so the cost stays linear in n)."""
     model = get_mechanism(mechanism)
-    full = model.kinematics(count, options)
     phi, p = ca.SX.sym("phi"), ca.SX.sym("p", len(model.lengths))
-    theta, dtheta, ddtheta, cos_mu = (v[k] for v in full.call([phi, p], True, False))
+    theta, dtheta, ddtheta, cos_mu, _ = model.chain(count, options, k).call([phi, p], True,
+                                                                            False)
     return ca.Function(f"{model.name}_chain{k}_length_gradients_n{count}", [phi, p],
                        [theta, dtheta, ddtheta, cos_mu, ca.jacobian(theta, p),
                         ca.jacobian(dtheta, p), ca.jacobian(cos_mu, p)])

@@ -71,3 +71,70 @@ def test_instructions_without_a_lane_form_are_refused():
     s = ca.SX.sym("s", 2, 2)
     with pytest.raises(NotImplementedError):
         Lanes(ca.Function("matrix_input", [s], [ca.trace(s)]))
+
+
+@pytest.fixture
+def own_cache(tmp_path, monkeypatch):
+    """An empty cache folder of the user's own, read and written."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    monkeypatch.setenv("OPTDESIGN_COMPILE", "on")
+    return tmp_path / "optdesign"
+
+
+def _kept(where):
+    return sorted(p for p in where.iterdir() if p.name.startswith("lanes-"))
+
+
+def _same(a, b, fn):
+    rng = np.random.default_rng(5)
+    phi = rng.uniform(0.0, 2 * np.pi, (1, 300))
+    p = rng.uniform(0.8, 1.2, (fn.nnz_in(1), 300)) * 100.0
+    return all(np.array_equal(x, y, equal_nan=True) for x, y in zip(a(phi, p), b(phi, p)))
+
+
+def test_the_code_is_kept_and_a_later_process_runs_the_same_bit_for_bit(own_cache,
+                                                                       monkeypatch):
+    from optdesign.numerics import lanes
+
+    fn = get_mechanism("fourbar_converter").kinematics(3, ())
+    made = Lanes(fn)
+    (path,) = _kept(own_cache)
+    assert oct(path.stat().st_mode & 0o077) == oct(0)
+
+    def untranslated(fn):
+        raise AssertionError("translated again: the kept code was not loaded")
+
+    monkeypatch.setattr(lanes, "_source", untranslated)
+    assert _same(Lanes(fn), made, fn)
+
+
+@pytest.mark.parametrize("spoil", ["garbage", "cut short", "another function's",
+                                   "writable by others"])
+def test_a_kept_file_not_to_be_trusted_is_ignored_and_made_anew(own_cache, spoil):
+    from optdesign.numerics import lanes
+
+    fn = get_mechanism("slotted_lever").kinematics(3, ())
+    made = Lanes(fn)
+    (path,) = _kept(own_cache)
+    good = path.read_bytes()
+    if spoil == "garbage":
+        path.write_bytes(b"import os; os.system('false')\n" * 40)
+    elif spoil == "cut short":
+        path.write_bytes(good[:len(good) // 2])
+    elif spoil == "another function's":
+        other = get_mechanism("slotted_lever").kinematics(4, ())
+        Lanes(other)
+        foreign = next(p for p in _kept(own_cache) if p != path)
+        path.write_bytes(foreign.read_bytes())
+    else:
+        path.chmod(0o666)
+    where, digest = lanes._cache_of(fn)
+    assert lanes._cached(where, digest) is None
+    assert _same(Lanes(fn), made, fn)
+    assert path.read_bytes() == good and path.stat().st_mode & 0o077 == 0   # made anew
+
+
+def test_nothing_is_kept_when_the_cache_is_off(own_cache, monkeypatch):
+    monkeypatch.setenv("OPTDESIGN_COMPILE", "off")
+    Lanes(get_mechanism("pulse_reducer").kinematics(3, ()))
+    assert not own_cache.exists() or _kept(own_cache) == []

@@ -13,14 +13,32 @@ CasADi's to a few units in the last place (``tests/test_lanes.py``).
 Only scalar SX instructions are translated; a function holding anything else (a call, a
 matrix operation) raises :class:`NotImplementedError` at construction, and the caller keeps
 ``map``.
+
+Translating and compiling the statements takes a tenth of a second for the kinematics of 24
+chains, in every new process; the compiled code is kept in the user's cache folder
+(:mod:`optdesign.numerics.user_cache`), named by a digest of the function as CasADi
+serialises it, of this module's own text and of the Python that compiled it: a later process
+loads the very same code (a millisecond), so the values are the same to the bit.
 """
 from __future__ import annotations
+
+import hashlib
+import importlib.util
+import marshal
+import sys
+import types
+from functools import lru_cache
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
+from optdesign.numerics import user_cache
+
 #: lanes per pass: the work arrays of one pass stay in the processor's cache
 CHUNK = 4096
+#: a cached kernel's trailer tag (:func:`optdesign.numerics.user_cache.trailer`)
+CACHE_TAG = "optdesign-lanes"
 
 _UNARY = {
     "OP_ASSIGN": "{0}", "OP_NEG": "-{0}", "OP_SQ": "{0} * {0}", "OP_TWICE": "2.0 * {0}",
@@ -88,7 +106,25 @@ class Lanes:
 
 
 def _compile(fn: ca.Function):
-    """The instruction list as the body of one Python function over NumPy arrays."""
+    """The instruction list as the body of one Python function over NumPy arrays (its code
+    from the user's cache where it is kept there, else compiled and kept)."""
+    where, digest = _cache_of(fn)
+    code = _cached(where, digest)
+    if code is None:
+        code = compile(_source(fn), f"<lanes {fn.name()}>", "exec")
+        if where is not None:
+            _keep(where, digest, code)
+    namespace = {"np": np}
+    kernel = next(c for c in code.co_consts if isinstance(c, types.CodeType))
+    if "special" in kernel.co_names:         # erf alone needs scipy (0.2 s to import)
+        from scipy import special
+        namespace["special"] = special
+    exec(code, namespace)
+    return namespace["kernel"]
+
+
+def _source(fn: ca.Function) -> str:
+    """The Python text of :func:`_compile`'s function."""
     body = []
     for k in range(fn.n_instructions()):
         op = _NAMES.get(fn.instruction_id(k), str(fn.instruction_id(k)))
@@ -105,13 +141,54 @@ def _compile(fn: ca.Function):
             body.append(f"w{res[0]} = " + _BINARY[op].format(f"w{args[0]}", f"w{args[1]}"))
         else:
             raise NotImplementedError(f"{fn.name()}: instruction {op} has no NumPy lane form")
-    source = "def kernel(a, o):\n" + "".join(f"    {line}\n" for line in body or ["pass"])
-    namespace = {"np": np}
-    if any("special." in line for line in body):     # erf alone needs scipy (0.2 s to import)
-        from scipy import special
-        namespace["special"] = special
-    exec(compile(source, f"<lanes {fn.name()}>", "exec"), namespace)
-    return namespace["kernel"]
+    return "def kernel(a, o):\n" + "".join(f"    {line}\n" for line in body or ["pass"])
+
+
+@lru_cache(maxsize=1)
+def _translator() -> bytes:
+    """What the code depends on besides the function: this module's text (its translation
+    tables) and the Python that compiles it (its bytecode's magic number)."""
+    return hashlib.sha256(Path(__file__).read_bytes()).digest() + \
+        importlib.util.MAGIC_NUMBER + sys.version.encode()
+
+
+def _cache_of(fn: ca.Function) -> tuple[Path | None, str]:
+    """(the cache folder, the digest of ``fn``'s code); no folder under
+    ``OPTDESIGN_COMPILE=off`` or where the user has none."""
+    if user_cache.mode() == "off":
+        return None, ""
+    where = user_cache.folder()
+    if where is None:
+        return None, ""
+    digest = hashlib.sha256(_translator() + fn.serialize().encode()).hexdigest()
+    return where, digest
+
+
+def _path(where: Path, digest: str) -> Path:
+    return where / f"lanes-{digest[:40]}.marshal"
+
+
+def _cached(where: Path | None, digest: str) -> types.CodeType | None:
+    """The kept code of ``digest``, or None (none kept, or a file not to be trusted)."""
+    if where is None:
+        return None
+    body = user_cache.trusted(_path(where, digest), CACHE_TAG, digest)
+    if body is None:
+        return None
+    try:
+        code = marshal.loads(body)
+    except (EOFError, ValueError, TypeError):
+        return None
+    return code if isinstance(code, types.CodeType) else None
+
+
+def _keep(where: Path, digest: str, code: types.CodeType) -> None:
+    """``code`` into the cache (a failure costs the next process the compile alone)."""
+    body = marshal.dumps(code)
+    try:
+        user_cache.write(_path(where, digest), body + user_cache.trailer(CACHE_TAG, digest, body))
+    except OSError as exc:
+        user_cache.log.debug("the lanes of %s not kept (%s)", digest[:12], exc)
 
 
 def _literal(value: float) -> str:

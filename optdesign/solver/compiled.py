@@ -9,7 +9,8 @@ minutes per NLP, so it happens once, and never while a command waits:
 * an NLP's library is named by a digest of the NLP's function (x, p) -> (f, g) as CasADi
   serialises it (its expression graph, from which the generated code follows), CasADi's
   version, the machine, the compiler's flags and the Hessian IPOPT asks for; it lives in the
-  user's cache folder, ``$XDG_CACHE_HOME/optdesign`` (else ``~/.cache/optdesign``), mode 0700;
+  user's cache folder (:mod:`optdesign.numerics.user_cache`: ``$XDG_CACHE_HOME/optdesign``,
+  else ``~/.cache/optdesign``, mode 0700);
 * a solve that finds its library loads it (a millisecond or two) when the file is the user's
   own, not writable by group or others, and ends in a trailer with the NLP's digest and the
   checksum of the bytes before it: a corrupt, foreign or stale file is ignored (and built
@@ -22,7 +23,8 @@ minutes per NLP, so it happens once, and never while a command waits:
   warm-up``, which builds a problem's libraries ahead of time (:func:`warm_up`).
 
 ``OPTDESIGN_COMPILE``: ``on`` (the default), ``load`` (load libraries, start no build: the
-test suite), ``off`` (the virtual machine always). Without ``gcc`` on PATH nothing is built.
+test suite), ``off`` (the virtual machine always, nothing cached read or written). Without
+``gcc`` on PATH nothing is built.
 """
 from __future__ import annotations
 
@@ -31,7 +33,6 @@ import logging
 import os
 import platform
 import shutil
-import stat
 import subprocess
 import sys
 import tempfile
@@ -41,9 +42,12 @@ from pathlib import Path
 
 import casadi as ca
 
-#: on | load | off (see the module's text)
-VARIABLE = "OPTDESIGN_COMPILE"
-MODES = ("on", "load", "off")
+from optdesign.numerics.user_cache import (MODES, VARIABLE, folder, mode, trailer, trusted,
+                                           write as _write)
+
+__all__ = ["MODES", "VARIABLE", "Recipe", "build", "building", "builds_under_way", "compiler",
+           "folder", "library", "mode", "name_of", "nlpsol", "recipe", "start", "warm_up"]
+
 COMPILER = "gcc"
 #: -O1: -O2 is no faster on these functions and compiles longer; no contraction into fused
 #: multiply-adds, so the C code rounds as the virtual machine does on every target
@@ -52,7 +56,6 @@ FLAGS = ("-O1", "-shared", "-fPIC", "-ffp-contract=off")
 FORMAT = 1
 #: a library's trailer: this tag, the NLP's digest and the checksum of the bytes before it
 TRAILER_TAG = "optdesign-nlp"
-TRAILER_BYTES = len(TRAILER_TAG) + 2 * 64 + 4
 #: a lock this old belongs to a build that died: taken over
 LOCK_STALE_S = 3600.0
 #: a failed build is not started again by a solve for this long (warm-up always tries)
@@ -68,43 +71,9 @@ MAX_DETACHED_BUILDS = 1
 log = logging.getLogger("optdesign.compiled")
 
 
-def mode(env=os.environ) -> str:
-    """``OPTDESIGN_COMPILE`` (on, load or off); an unknown value is taken as off."""
-    value = env.get(VARIABLE, "").strip().lower() or "on"
-    if value not in MODES:
-        log.debug("%s=%r is not one of %s: the virtual machine only", VARIABLE,
-                  env[VARIABLE], ", ".join(MODES))
-        return "off"
-    return value
-
-
 def compiler() -> str | None:
     """The C compiler's path, or None where there is none on PATH."""
     return shutil.which(COMPILER)
-
-
-def folder(env=os.environ) -> Path | None:
-    """The cache folder, created with mode 0700; None where it is not this user's own (or
-    cannot be made). A folder of the user's own that others may enter is closed first."""
-    base = env.get("XDG_CACHE_HOME", "")
-    base = Path(base) if os.path.isabs(base) else Path.home() / ".cache"
-    path = base / "optdesign"
-    try:
-        base.mkdir(parents=True, exist_ok=True)
-        try:
-            os.mkdir(path, 0o700)
-        except FileExistsError:
-            pass
-        st = os.lstat(path)
-        if not stat.S_ISDIR(st.st_mode) or st.st_uid != os.getuid():
-            log.debug("%s is not this user's folder: no compiled derivatives", path)
-            return None
-        if st.st_mode & 0o077:
-            os.chmod(path, 0o700)
-    except OSError as exc:
-        log.debug("no cache folder for compiled derivatives (%s)", exc)
-        return None
-    return path
 
 
 @dataclass(frozen=True)
@@ -145,25 +114,7 @@ def library(rec: Recipe, where: Path) -> Path | None:
     trailer's checksum), or built for another NLP (its trailer's digest). Checked before it
     is loaded: a library cut short would crash the process that maps it."""
     path = where / f"{rec.name}.so"
-    try:
-        st = os.lstat(path)
-        if not stat.S_ISREG(st.st_mode) or st.st_uid != os.getuid() or st.st_mode & 0o022:
-            log.debug("%s is not this user's own or others may write it: ignored", path)
-            return None
-        data = path.read_bytes()
-    except OSError:
-        return None
-    body, trailer = data[:-TRAILER_BYTES], data[-TRAILER_BYTES:]
-    if trailer != _trailer(rec.digest, body):
-        log.debug("%s is corrupt or was built for another NLP: ignored", path)
-        return None
-    return path
-
-
-def _trailer(digest: str, body: bytes) -> bytes:
-    """What a library carries after its last byte: the NLP's digest and its own checksum
-    (the dynamic loader reads no further than the ELF headers say)."""
-    return f"\n{TRAILER_TAG} {digest} {hashlib.sha256(body).hexdigest()}\n".encode()
+    return path if trusted(path, TRAILER_TAG, rec.digest) is not None else None
 
 
 def nlpsol(name: str, x, p, f, g, opts: dict) -> ca.Function:
@@ -287,21 +238,6 @@ def start(rec: Recipe, where: Path, detached: bool = True,
     return child
 
 
-def _write(path: Path, data: bytes, keep: bool = False) -> Path:
-    """``data`` into ``path`` atomically (a temporary file of this user's, renamed); with
-    ``keep``, into the temporary file of a name of its own alone, returned."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-        if not keep:
-            os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return Path(tmp) if keep else path
-
-
 def build(where: Path, digest: str, hessian: str, gcc: str, source: str) -> Path:
     """Generate the C code of the NLP serialised in ``where``/``source`` for ``digest``,
     compile it and put the library in place (atomically); the lock and the serialised NLP
@@ -320,7 +256,7 @@ def build(where: Path, digest: str, hessian: str, gcc: str, source: str) -> Path
                                f"{' '.join(done.stderr.split())[-500:]}")
         body = (work / "nlp.so").read_bytes()
         with open(work / "nlp.so", "ab") as fh:
-            fh.write(_trailer(digest, body))
+            fh.write(trailer(TRAILER_TAG, digest, body))
         os.chmod(work / "nlp.so", 0o700)
         os.replace(work / "nlp.so", where / f"{name}.so")
         (where / f"{name}.failed").unlink(missing_ok=True)

@@ -1,0 +1,107 @@
+"""The user's cache folder, and the files in it a process may trust.
+
+What is costly to make and the same every time (an NLP's derivatives compiled to C,
+:mod:`optdesign.solver.compiled`; the NumPy lanes' Python code, :mod:`optdesign.numerics.lanes`)
+is kept in ``$XDG_CACHE_HOME/optdesign`` (else ``~/.cache/optdesign``), mode 0700. A file
+there is read only when it is a regular file of this user's, not writable by group or others,
+and ends in a trailer with a tag, the digest of what it was made from and the checksum of the
+bytes before it: a corrupt, foreign or stale file is ignored (and made anew), never loaded.
+Files are written atomically.
+
+``OPTDESIGN_COMPILE``: ``on`` (the default), ``load`` (read what is cached, start no
+compiler: the test suite), ``off`` (nothing is read from the folder or written to it).
+"""
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+import stat
+import tempfile
+from pathlib import Path
+
+#: on | load | off (see the module's text)
+VARIABLE = "OPTDESIGN_COMPILE"
+MODES = ("on", "load", "off")
+
+log = logging.getLogger("optdesign.cache")
+
+
+def mode(env=os.environ) -> str:
+    """``OPTDESIGN_COMPILE`` (on, load or off); an unknown value is taken as off."""
+    value = env.get(VARIABLE, "").strip().lower() or "on"
+    if value not in MODES:
+        log.debug("%s=%r is not one of %s: the virtual machine only", VARIABLE,
+                  env[VARIABLE], ", ".join(MODES))
+        return "off"
+    return value
+
+
+def folder(env=os.environ) -> Path | None:
+    """The cache folder, created with mode 0700; None where it is not this user's own (or
+    cannot be made). A folder of the user's own that others may enter is closed first."""
+    base = env.get("XDG_CACHE_HOME", "")
+    base = Path(base) if os.path.isabs(base) else Path.home() / ".cache"
+    path = base / "optdesign"
+    try:
+        base.mkdir(parents=True, exist_ok=True)
+        try:
+            os.mkdir(path, 0o700)
+        except FileExistsError:
+            pass
+        st = os.lstat(path)
+        if not stat.S_ISDIR(st.st_mode) or st.st_uid != os.getuid():
+            log.debug("%s is not this user's folder: nothing cached is used", path)
+            return None
+        if st.st_mode & 0o077:
+            os.chmod(path, 0o700)
+    except OSError as exc:
+        log.debug("no cache folder (%s)", exc)
+        return None
+    return path
+
+
+def trailer(tag: str, digest: str, body: bytes) -> bytes:
+    """What a cached file carries after its last byte: its tag, the digest of what it was
+    made from and the checksum of ``body``, the bytes before it."""
+    return f"\n{tag} {digest} {hashlib.sha256(body).hexdigest()}\n".encode()
+
+
+def trailer_bytes(tag: str) -> int:
+    """The length of a :func:`trailer` with ``tag`` (a sha256 digest and checksum)."""
+    return len(tag) + 2 * 64 + 4
+
+
+def trusted(path: Path, tag: str, digest: str) -> bytes | None:
+    """The bytes of ``path`` before its trailer, or None: missing, not a regular file of
+    this user's, writable by group or others, cut short or changed since it was written (its
+    trailer's checksum), or made from something else (its trailer's digest)."""
+    try:
+        st = os.lstat(path)
+        if not stat.S_ISREG(st.st_mode) or st.st_uid != os.getuid() or st.st_mode & 0o022:
+            log.debug("%s is not this user's own or others may write it: ignored", path)
+            return None
+        data = path.read_bytes()
+    except OSError:
+        return None
+    size = trailer_bytes(tag)
+    body = data[:-size]
+    if len(data) <= size or data[-size:] != trailer(tag, digest, body):
+        log.debug("%s is corrupt or was made from something else: ignored", path)
+        return None
+    return body
+
+
+def write(path: Path, data: bytes, keep: bool = False) -> Path:
+    """``data`` into ``path`` atomically (a temporary file of this user's, mode 0600,
+    renamed); with ``keep``, into the temporary file of a name of its own alone, returned."""
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+        if not keep:
+            os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return Path(tmp) if keep else path

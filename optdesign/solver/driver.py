@@ -437,13 +437,13 @@ class _Polishing:
             before = replace(self.solver.timings)
             runs = _in_parallel(self.problem, self.count, [c.values for c in seeds[1:together]],
                                 lambda: self.polish(seeds[0].values, first))
-            mine = self.solver.timings
             for outcome, _ in runs:
                 self.record(outcome)
+            mine = self.solver.timings
             for stage in ("build", "ipopt", "verification"):   # the processes ran at once
-                setattr(mine, stage, getattr(before, stage) + max(
-                    getattr(t, stage) - getattr(before, stage) if t is mine else
-                    getattr(t, stage) for t in [mine] + [t for _, t in runs]))
+                here = getattr(mine, stage) - getattr(before, stage)
+                setattr(mine, stage, getattr(before, stage) +
+                        max([here] + [getattr(t, stage) for _, t in runs]))
             seeds = seeds[together:]
         for seed in seeds:
             if self.polished >= s.starts:

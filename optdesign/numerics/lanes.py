@@ -160,8 +160,12 @@ def _cache_of(fn: ca.Function) -> tuple[Path | None, str]:
     where = user_cache.folder()
     if where is None:
         return None, ""
-    digest = hashlib.sha256(_translator() + fn.serialize().encode()).hexdigest()
-    return where, digest
+    try:
+        text = fn.serialize()
+    except RuntimeError as exc:         # a function CasADi cannot write: compiled each time
+        user_cache.log.debug("%s not kept (%s)", fn.name(), exc)
+        return None, ""
+    return where, hashlib.sha256(_translator() + text.encode()).hexdigest()
 
 
 def _path(where: Path, digest: str) -> Path:

@@ -213,9 +213,49 @@ def interrupts_kept():
     interpreter's, a notebook kernel's, :func:`exit_on_sigterm`'s) still runs, so IPOPT
     stops at once, and a call is recorded; as the block ends, the handler is called again
     where its exception can propagate. Nothing changes where SIGINT is ignored (a worker)
-    or outside the main thread."""
-    with _handlers_wrapped((signal.SIGINT,), through=True):
-        yield
+    or outside the main thread. CasADi's warning that it caught the Ctrl-C is not printed
+    (:class:`_WithoutInterruptWarning`): the one line the command prints says so."""
+    if threading.current_thread() is not threading.main_thread():
+        yield                           # no Ctrl-C is handled here: nothing to keep
+        return
+    quiet = _WithoutInterruptWarning(sys.stderr)
+    sys.stderr = quiet
+    try:
+        with _handlers_wrapped((signal.SIGINT,), through=True):
+            yield
+    finally:
+        if sys.stderr is quiet:
+            sys.stderr = quiet.stream
+        quiet.close_line()
+
+
+class _WithoutInterruptWarning:
+    """``stream`` (standard error) less the lines of CasADi's warning that IPOPT was
+    interrupted by a Ctrl-C. CasADi writes a line in many pieces, so a line that begins as
+    CasADi's do is passed on whole (the last, unfinished one by :meth:`close_line`); any
+    other text at once."""
+
+    MARK = 'WARNING("KeyboardInterruptException")'
+
+    def __init__(self, stream):
+        self.stream, self.line = stream, ""
+
+    def write(self, text: str) -> int:
+        if not self.line and not text.startswith("CasADi"):
+            return self.stream.write(text)
+        *whole, self.line = (self.line + text).split("\n")
+        for line in whole:
+            if self.MARK not in line:
+                self.stream.write(line + "\n")
+        return len(text)
+
+    def close_line(self) -> None:
+        if self.line and self.MARK not in self.line:
+            self.stream.write(self.line)
+        self.line = ""
+
+    def __getattr__(self, name):
+        return getattr(self.stream, name)
 
 
 def beside(fn, *args):

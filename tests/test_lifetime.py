@@ -3,6 +3,7 @@ child lost without a word; and no Ctrl-C lost, whether it lands as a child is fo
 finaliser or inside CasADi's IPOPT."""
 import os
 import signal
+import sys
 
 import pytest
 
@@ -63,7 +64,8 @@ def test_a_child_forked_with_signals_held_sets_its_own():
     assert beside(signal.getsignal, signal.SIGTERM)() == signal.SIG_DFL
 
 
-def test_casadi_swallows_a_ctrl_c_during_ipopt_and_interrupts_kept_raises_it_again(request):
+def test_casadi_swallows_a_ctrl_c_during_ipopt_and_interrupts_kept_raises_it_again(request,
+                                                                                  capsys):
     import threading
 
     import casadi as ca
@@ -91,9 +93,12 @@ def test_casadi_swallows_a_ctrl_c_during_ipopt_and_interrupts_kept_raises_it_aga
         return solver.stats()["return_status"]
 
     assert interrupted_run() == "NonIpopt_Exception_Thrown"     # the Ctrl-C is gone
+    assert "KeyboardInterruptException" in capsys.readouterr().err   # CasADi's warning
     with pytest.raises(KeyboardInterrupt):
         with interrupts_kept():
+            print("a line of its own", file=sys.stderr)
             interrupted_run()
+    assert capsys.readouterr().err == "a line of its own\n"         # the warning alone gone
 
 
 def test_a_ctrl_c_dropped_in_a_finaliser_comes_back_unprinted(capsys):

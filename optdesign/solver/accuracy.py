@@ -9,7 +9,7 @@ import numpy as np
 
 from optdesign.envelope.exact import DEFAULT_GRID, exact_figures
 from optdesign.evaluation.design import Design
-from optdesign.evaluation.figures import eccentricities_of
+from optdesign.evaluation.figures import eccentricities_of, evaluate
 from optdesign.quantities.criteria import TOL_ANGLE_DEG, TOL_LENGTH_REL, TOL_RATIO
 
 def solve_accuracy(problem, best) -> dict:
@@ -47,7 +47,9 @@ def solve_accuracy(problem, best) -> dict:
     phi = np.linspace(0.0, 2 * np.pi, s.samples, endpoint=False)
     sampled_angle = math.inf
     for e in eccentricities_of(problem):          # e = 1 (the ratio) and the listed ones
-        coarse, _ = exact_figures(design, problem.stroke, problem.input_speed, e)
+        # the grid the answer was verified on: that evaluation, from the evaluator's memory
+        coarse = evaluate(design, problem.stroke, problem.input_speed, (e,)).per_e[0] \
+            .figures[problem.stroke]
         fine, _ = exact_figures(design, problem.stroke, problem.input_speed, e,
                                 n_grid=4 * DEFAULT_GRID)
         definition = problem.objective.ripple

@@ -171,19 +171,27 @@ class Mechanism(ABC):
             fn = self.speeds(count, options)
             return lambda phi, p: fn.map(np.shape(p)[1])(phi, p)
 
-    @lru_cache(maxsize=64)
     def chain(self, count: int, options: tuple[tuple[str, str], ...], k: int) -> ca.Function:
         """(phi, p) -> θ_k, dθ_k/dφ, d²θ_k/dφ², cos μ_k, d cos μ_k/dφ of chain k alone: an SX function
         holds only the nodes its outputs need, so a point that tracks one curve (a peak) does
         not pay for every chain."""
+        return self._chains(count, options)[k]
+
+    @lru_cache(maxsize=64)
+    def _chains(self, count: int, options: tuple[tuple[str, str], ...]) -> tuple:
+        """Every chain's function (:meth:`chain`), taken from one symbolic call of
+        :meth:`kinematics` (each function holds chain k's nodes alone, as from a call of its
+        own: the same arithmetic)."""
         full = self.kinematics(count, options)
         phi = ca.SX.sym("phi")
         pvec = ca.SX.sym("p", len(self.lengths))
         theta, dtheta, ddtheta, cos_mu = full.call([phi, pvec], True, False)
-        return ca.Function(f"{self.name}_chain{k}_n{count}", [phi, pvec],
-                           [theta[k], dtheta[k], ddtheta[k], cos_mu[k],
-                            ca.jacobian(cos_mu[k], phi)],
-                           ["phi", "p"], ["theta", "dtheta", "ddtheta", "cos_mu", "dcos_mu"])
+        return tuple(ca.Function(f"{self.name}_chain{k}_n{count}", [phi, pvec],
+                                 [theta[k], dtheta[k], ddtheta[k], cos_mu[k],
+                                  ca.jacobian(cos_mu[k], phi)],
+                                 ["phi", "p"], ["theta", "dtheta", "ddtheta", "cos_mu",
+                                                "dcos_mu"])
+                     for k in range(count))
 
     @lru_cache(maxsize=64)
     def has_transmission_angle(self, count: int, options: tuple[tuple[str, str], ...]) -> bool:

@@ -109,23 +109,33 @@ class Mechanism(ABC):
 
     # ----------------------------------------------------------------- built once
     @lru_cache(maxsize=64)
+    def symbolic(self, count: int, options: tuple[tuple[str, str], ...] = ()) -> tuple:
+        """(φ, p, p by name, model): :meth:`chain_expressions` on symbols of its own, with
+        ``dtheta`` = dθ/dφ1 and ``ddtheta`` = d²θ/dφ1² (a column each) by algorithmic
+        differentiation. Built once per count and shared by the functions made from it
+        (:meth:`kinematics`, :meth:`joints`, the quantities'): each holds the nodes its own
+        outputs need, so its arithmetic is what a model of its own gives."""
+        opts = self.default_options() | dict(options)
+        phi = ca.SX.sym("phi")
+        pvec = ca.SX.sym("p", len(self.lengths))
+        p = {name: pvec[i] for i, name in enumerate(self.lengths)}
+        model = dict(self.chain_expressions(phi, p, count, opts))
+        model["dtheta"] = ca.jacobian(ca.vertcat(*model["theta"]), phi)
+        model["ddtheta"] = ca.jacobian(model["dtheta"], phi)
+        return phi, pvec, p, model
+
+    @lru_cache(maxsize=64)
     def kinematics(self, count: int, options: tuple[tuple[str, str], ...] = ()) -> ca.Function:
         """``casadi.Function`` (phi, p) -> (theta, dtheta, ddtheta, cos_mu).
 
         ``dtheta = dθ/dφ1`` and ``ddtheta = d²θ/dφ1²`` by algorithmic differentiation, so the
         rocker speed is ω_k = ω1 · dtheta_k (docs/formulation.md).
         """
-        opts = self.default_options() | dict(options)
-        phi = ca.SX.sym("phi")
-        pvec = ca.SX.sym("p", len(self.lengths))
-        p = {name: pvec[i] for i, name in enumerate(self.lengths)}
-        model = self.chain_expressions(phi, p, count, opts)
+        phi, pvec, _, model = self.symbolic(count, options)
         theta = ca.vertcat(*model["theta"])
-        dtheta = ca.jacobian(theta, phi)
-        ddtheta = ca.jacobian(dtheta, phi)
         cos_mu = ca.vertcat(*model["cos_mu"])
         return ca.Function(f"{self.name}_n{count}", [phi, pvec],
-                           [theta, dtheta, ddtheta, cos_mu],
+                           [theta, model["dtheta"], model["ddtheta"], cos_mu],
                            ["phi", "p"], ["theta", "dtheta", "ddtheta", "cos_mu"])
 
     @lru_cache(maxsize=64)
@@ -218,11 +228,7 @@ class Mechanism(ABC):
     @lru_cache(maxsize=64)
     def joints(self, count: int, options: tuple[tuple[str, str], ...] = ()):
         """``casadi.Function`` (phi, p) -> 2×J joint positions, and the names and links."""
-        opts = self.default_options() | dict(options)
-        phi = ca.SX.sym("phi")
-        pvec = ca.SX.sym("p", len(self.lengths))
-        p = {name: pvec[i] for i, name in enumerate(self.lengths)}
-        model = self.chain_expressions(phi, p, count, opts)
+        phi, pvec, _, model = self.symbolic(count, options)
         names = list(model["joints"])
         points = ca.horzcat(*[model["joints"][k] for k in names])
         return ca.Function(f"{self.name}_joints_n{count}", [phi, pvec], [points]), names, \

@@ -237,24 +237,8 @@ def _tracked(quantity: TurnQuantity, mechanism, count: int, options: tuple):
 
 @lru_cache(maxsize=256)
 def _functions(quantity: TurnQuantity, mechanism, count: int, options: tuple):
-    phi, pvec, p, model = _model(mechanism, count, options)
+    phi, pvec, p, model = mechanism.symbolic(count, options)
     g = ca.vertcat(*quantity.expression(dict(model), phi, p, count))
     name = f"{quantity.name}_{mechanism.name}_n{count}"
     return (ca.Function(name, [phi, pvec], [g]),
             ca.Function(f"d_{name}", [phi, pvec], [ca.jacobian(g, phi)]))
-
-
-@lru_cache(maxsize=64)
-def _model(mechanism, count: int, options: tuple):
-    """(φ, p, p by name, the mechanism's model): ``chain_expressions`` with dθ/dφ and
-    d²θ/dφ², built once per count and shared by every quantity's functions (each function
-    holds the nodes its own g needs, so its arithmetic is what a model of its own gives)."""
-    opts = mechanism.default_options() | dict(options)
-    phi = ca.SX.sym("phi")
-    pvec = ca.SX.sym("p", len(mechanism.lengths))
-    p = {name: pvec[i] for i, name in enumerate(mechanism.lengths)}
-    model = dict(mechanism.chain_expressions(phi, p, count, opts))
-    theta = ca.vertcat(*model["theta"])
-    model["dtheta"] = ca.jacobian(theta, phi)
-    model["ddtheta"] = ca.jacobian(model["dtheta"], phi)
-    return phi, pvec, p, model

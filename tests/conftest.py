@@ -61,6 +61,14 @@ def file_data(path, **changes) -> dict:
     return data
 
 
+def near_starter(model, rng, spread: float) -> list[float]:
+    """The lengths of ``model``'s starter design (``optdesign init``'s), each moved by up to
+    ``spread`` of itself at random: a design of the mechanism that assembles."""
+    start = {k: v["initial"] if isinstance(v, dict) else v
+             for k, v in model.starter["design"].items()}
+    return [start[n] * rng.uniform(1.0 - spread, 1.0 + spread) for n in model.lengths]
+
+
 def base_problem(**changes):
     data = yaml.safe_load((ROOT / "problems" / "sharkov2022.yaml").read_text())
     data.update(changes)

@@ -17,7 +17,7 @@ from optdesign.evaluation.figures import evaluate_problem
 from optdesign.problem.loader import load_problem
 from optdesign.quantities import design_quantities, get_quantity, known, quantities_of
 from optdesign.quantities.extremes import BREAK_STEP, _sample
-from tests.conftest import ROOT
+from tests.conftest import ROOT, near_starter
 
 TURN = ("housing_radius", "peak_acceleration", "swing")
 FILES = ("sharkov2022.yaml", "vergov.yaml", "pulse_reducer.yaml")
@@ -102,8 +102,6 @@ def test_quantities_share_one_model_and_keep_their_own_arithmetic(mechanism):
 
     model = get_mechanism(mechanism)
     options = tuple(sorted(model.default_options().items()))
-    start = {k: v["initial"] if isinstance(v, dict) else v
-             for k, v in model.starter["design"].items()}
     rng = np.random.default_rng(11)
     turn = [get_quantity(n) for n in known() if isinstance(get_quantity(n), TurnQuantity)]
     assert turn
@@ -118,7 +116,7 @@ def test_quantities_share_one_model_and_keep_their_own_arithmetic(mechanism):
         shared = quantity.function(model, 5, options)
         for _ in range(3):
             angles = ca.DM(rng.uniform(0.0, 2 * np.pi, 7)).T
-            lengths = ca.DM([start[n] * rng.uniform(0.98, 1.02) for n in model.lengths])
+            lengths = ca.DM(near_starter(model, rng, 0.02))
             want = [np.array(v) for v in reference(angles, lengths)]
             got = [np.array(f(angles, lengths)) for f in shared]
             assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(got, want))

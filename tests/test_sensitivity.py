@@ -16,7 +16,7 @@ from optdesign.evaluation.design import Design
 from optdesign.evaluation.figures import evaluate_problem
 from optdesign.problem.loader import load_problem
 from optdesign.evaluation.sensitivity import sensitivities
-from tests.conftest import ROOT
+from tests.conftest import ROOT, near_starter
 
 H = 1e-4                      # mm
 REL, ABS = 1e-6, 1e-9         # see the module docstring
@@ -190,8 +190,6 @@ def test_a_chain_s_gradients_come_from_its_own_function_bit_for_bit(mechanism, c
 
     model = get_mechanism(mechanism)
     options = tuple(sorted(model.default_options().items()))
-    start = {k: v["initial"] if isinstance(v, dict) else v
-             for k, v in model.starter["design"].items()}
     rng = np.random.default_rng(3)
     phi, p = ca.SX.sym("phi"), ca.SX.sym("p", len(model.lengths))
     for k in range(count):
@@ -201,7 +199,7 @@ def test_a_chain_s_gradients_come_from_its_own_function_bit_for_bit(mechanism, c
             ca.jacobian(theta, p), ca.jacobian(dtheta, p), ca.jacobian(cos_mu, p)])
         for _ in range(3):
             angles = ca.DM(rng.uniform(0.0, 2 * np.pi, 5)).T
-            lengths = ca.DM([start[n] * rng.uniform(0.98, 1.02) for n in model.lengths])
+            lengths = ca.DM(near_starter(model, rng, 0.02))
             got = _gradient_function(mechanism, count, options, k)(angles, lengths)
             for a, b in zip(got, reference(angles, lengths)):
                 assert np.array_equal(np.array(a), np.array(b), equal_nan=True)

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from optdesign.mechanisms import get_mechanism, known
+from tests.conftest import near_starter
 
 
 def _alone(model, count, options, k):
@@ -22,15 +23,13 @@ def _alone(model, count, options, k):
 def test_every_chain_from_one_call_is_the_chain_made_alone(mechanism, count):
     model = get_mechanism(mechanism)
     options = tuple(sorted(model.default_options().items()))
-    start = {k: v["initial"] if isinstance(v, dict) else v
-             for k, v in model.starter["design"].items()}
     rng = np.random.default_rng(count)
     for k in range(count):
         shared, alone = model.chain(count, options, k), _alone(model, count, options, k)
         assert shared.n_instructions() == alone.n_instructions()
         for _ in range(3):
             angles = ca.DM(rng.uniform(0.0, 2 * np.pi, 9)).T
-            lengths = ca.DM([start[n] * rng.uniform(0.97, 1.03) for n in model.lengths])
+            lengths = ca.DM(near_starter(model, rng, 0.03))
             for a, b in zip(shared(angles, lengths), alone(angles, lengths)):
                 assert np.array_equal(np.array(a), np.array(b), equal_nan=True)
 
@@ -52,13 +51,11 @@ def test_kinematics_and_joints_on_the_shared_model_are_those_of_a_model_of_their
                                                   ca.vertcat(*own["cos_mu"])])
     joints = ca.Function("own_joints", [phi, pvec],
                          [ca.horzcat(*[own["joints"][k] for k in own["joints"]])])
-    start = {k: v["initial"] if isinstance(v, dict) else v
-             for k, v in model.starter["design"].items()}
     rng = np.random.default_rng(5)
     for shared, alone in ((model.kinematics(5, options), kinematics),
                           (model.joints(5, options)[0], joints)):
         assert shared.n_instructions() == alone.n_instructions()
         angles = ca.DM(rng.uniform(0.0, 2 * np.pi, 9)).T
-        lengths = ca.DM([start[n] * rng.uniform(0.97, 1.03) for n in model.lengths])
+        lengths = ca.DM(near_starter(model, rng, 0.03))
         for a, b in zip(shared.call([angles, lengths]), alone.call([angles, lengths])):
             assert np.array_equal(np.array(a), np.array(b), equal_nan=True)

@@ -10,6 +10,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
+from optdesign.numerics import lanes as lanes_module
 from optdesign.numerics.lanes import Lanes
 from optdesign.mechanisms import get_mechanism, known
 
@@ -71,6 +72,66 @@ def test_instructions_without_a_lane_form_are_refused():
     s = ca.SX.sym("s", 2, 2)
     with pytest.raises(NotImplementedError):
         Lanes(ca.Function("matrix_input", [s], [ca.trace(s)]))
+
+
+def _many_lanes(model, count, L, seed):
+    rng = np.random.default_rng(seed)
+    phi = rng.uniform(0.0, 2 * np.pi, (1, L))
+    return phi, rng.uniform(0.3, 3.0, (len(model.lengths), L)) * 100.0
+
+
+@pytest.mark.parametrize("name", known())
+def test_passes_shared_between_two_threads_give_the_same_values_to_the_bit(name, monkeypatch):
+    """Every lane is computed on its own: cut into other passes, or the passes shared between
+    two threads, the values are those of one thread, bit for bit (lengths far enough apart
+    that some chains do not assemble), whatever the count of passes (odd, even, one short)."""
+    import threading
+
+    model = get_mechanism(name)
+    lanes = Lanes(model.speeds(5, ()))
+    started = []
+    real = threading.Thread.start
+    monkeypatch.setattr(threading.Thread, "start",
+                        lambda self: (started.append(self.name), real(self))[1])
+    for L in (3 * lanes_module.THREADED_CHUNK + 17, 2 * lanes_module.THREADED_CHUNK + 1,
+              4 * lanes_module.THREADED_CHUNK):
+        args = _many_lanes(model, 5, L, L)
+        alone = lanes(*args)
+        with lanes_module.threads(2):
+            shared = lanes(*args)
+        assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(alone, shared))
+    assert started == ["lanes"] * 3          # one helper thread per call, and only in threads()
+
+
+def test_one_thread_unless_asked_or_the_call_is_short(monkeypatch):
+    import threading
+
+    model = get_mechanism("fourbar_converter")
+    lanes = Lanes(model.speeds(4, ()))
+    started = []
+    monkeypatch.setattr(threading.Thread, "start", lambda self: started.append(self.name))
+    lanes(*_many_lanes(model, 4, 3 * lanes_module.THREADED_CHUNK, 1))      # not asked
+    with lanes_module.threads(1):
+        lanes(*_many_lanes(model, 4, 3 * lanes_module.THREADED_CHUNK, 1))
+    with lanes_module.threads(2):
+        lanes(*_many_lanes(model, 4, lanes_module.THREADED_CHUNK, 1))      # one pass
+    assert started == []
+
+
+def test_an_error_in_the_helper_thread_is_raised_in_the_caller(monkeypatch):
+    x = ca.SX.sym("x")
+    lanes = Lanes(ca.Function("f", [x], [ca.sin(x)]))
+    calls = []
+
+    def kernel(a, o):
+        calls.append(1)
+        if len(calls) == 2:
+            raise FloatingPointError("in a pass")
+        o[0][0] = np.sin(a[0][0])
+
+    monkeypatch.setattr(lanes, "_kernel", kernel)
+    with lanes_module.threads(2), pytest.raises(FloatingPointError, match="in a pass"):
+        lanes(np.zeros((1, 2 * lanes_module.THREADED_CHUNK + 1)))
 
 
 @pytest.fixture

@@ -23,6 +23,7 @@ from optdesign.errors import AssemblyError, ProblemError
 from optdesign.evaluation.regulation import quantities_over_range
 from optdesign.evaluation.sensitivity import sensitivity_record
 from optdesign.lifetime import die_with_parent, interrupts_kept, signals_held
+from optdesign.numerics import lanes
 from optdesign.quantities import design_quantities, get_quantity
 from optdesign.quantities.criteria import (LengthConstraint, bound_excess, constraints_of,
                                            interval_quantities, objective_of,
@@ -464,7 +465,7 @@ class _Polishing:
         it improves on the best (within the polish budget)."""
         tried: list[dict] = []
         while self.best is not None and self.polished < self.problem.solver.starts:
-            with self.solver.timings.stage("screening"):
+            with self.solver.timings.stage("screening"), lanes.threads(self.workers):
                 beside = [c for c in line_seeds(self.problem, self.count, self.best.values)
                           if not any(_close(self.problem, c.values, t) for t in tried)]
             if not beside:
@@ -569,7 +570,7 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
     robust = is_robust(problem)
     # a robust solve screens and polishes the nominal problem first (_from_nominal_optima)
     basins = solver.nominal_solver() if robust else solver
-    with basins.timings.stage("screening"):
+    with basins.timings.stage("screening"), lanes.threads(workers):
         screening = screen(basins.problem, count, problem.solver.screen,
                            extra=list(neighbours))
     result = PhaseResult(count, "failed", screening=screening.to_dict())
@@ -991,7 +992,8 @@ def summarized(problem, per_phase: list[PhaseResult], t0: float) -> SolveResult:
     timings = Timings()
     for p in per_phase:
         timings.add(Timings(**p.timings) if p.timings else Timings())
-    with timings.stage("verification"):
+    # every polish has ended: the answer's checks may use the cores the polishes used
+    with timings.stage("verification"), lanes.threads(workers_for(problem)):
         accuracy = solve_accuracy(problem, best)        # inside solve_time_s: part of the solve
         if best is not None and not best.sensitivities:     # the answer's alone
             best.sensitivities = sensitivity_record(problem, best.design)

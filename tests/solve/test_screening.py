@@ -55,6 +55,20 @@ def test_screening_filters_and_counts():
     assert s.to_dict()["basins"] == len(s.seeds)
 
 
+def test_the_screening_on_two_threads_ranks_the_same_designs_to_the_bit():
+    """A solve that owns the cores screens on two threads (``lanes.threads``): every sampled
+    score and violation is the one thread's to the bit, so the basins and seeds are too."""
+    from optdesign.numerics import lanes
+
+    p = disc_problem(24, 0.344)
+    alone = screen(p, 24, 512)
+    with lanes.threads(2):
+        shared = screen(p, 24, 512)
+    assert [(c.values, c.score, c.feasible) for c in alone.candidates] == \
+        [(c.values, c.score, c.feasible) for c in shared.candidates]
+    assert [c.values for c in alone.seeds] == [c.values for c in shared.seeds]
+
+
 def test_two_basins_file_start_in_the_worse_one():
     """The disc problem with 12 phases and ratio >= 0.2 has two basins: l3 ≈ 37.9 (angle slack,
     δ = 0.093852) and l3 ≈ 27.1 (transmission angle binding, δ = 0.092800). Started from the

@@ -992,8 +992,7 @@ def summarized(problem, per_phase: list[PhaseResult], t0: float) -> SolveResult:
     timings = Timings()
     for p in per_phase:
         timings.add(Timings(**p.timings) if p.timings else Timings())
-    # every polish has ended: the answer's checks may use the cores the polishes used
-    with timings.stage("verification"), lanes.threads(workers_for(problem)):
+    with timings.stage("verification"):
         accuracy = solve_accuracy(problem, best)        # inside solve_time_s: part of the solve
         if best is not None and not best.sensitivities:     # the answer's alone
             best.sensitivities = sensitivity_record(problem, best.design)

@@ -259,7 +259,7 @@ def sampled_scores(problem, count, base, free, X, sampled: dict | None = None,
         for e in eccentricities_of(problem):
             P = np.vstack([lengths[k] * (e if k == model.regulating_variable else 1.0)
                            for k in model.lengths])
-            dth, cos_mu = (np.array(v) for v in fmap(phi, np.repeat(P, N, axis=1)))
+            dth, cos_mu = fmap(phi, np.repeat(P, N, axis=1))      # fresh arrays: no copy
             n = dth.shape[0]
             f = driving_speeds(dth, problem.stroke).reshape(-1, S, N) / e
             env = np.maximum(f.max(axis=0), 0.0)
@@ -314,9 +314,11 @@ def _crossings(f: np.ndarray) -> np.ndarray:
     ``f``: curves × designs × samples. Returns designs × samples (inf where no hand-over).
     """
     nxt = np.roll(f, -1, axis=2)
-    a, b = f.argmax(axis=0), nxt.argmax(axis=0)
+    a = f.argmax(axis=0)
+    b = np.roll(a, -1, axis=1)          # the next sample's driving curve: nxt's argmax
     pick = lambda g, c: np.take_along_axis(g, c[None], axis=0)[0]   # noqa: E731
-    fa0, fa1, fb0, fb1 = pick(f, a), pick(nxt, a), pick(f, b), pick(nxt, b)
+    fa0, fa1, fb0 = pick(f, a), pick(nxt, a), pick(f, b)
+    fb1 = np.roll(fa0, -1, axis=1)      # the next sample's envelope: pick(nxt, b)
     gap0, gap1 = fa0 - fb0, fa1 - fb1
     t = np.clip(gap0 / np.where(gap0 != gap1, gap0 - gap1, 1.0), 0.0, 1.0)
     value = np.maximum(fa0 + t * (fa1 - fa0), 0.0)

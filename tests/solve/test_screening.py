@@ -46,6 +46,26 @@ def test_crossing_estimate_is_second_order():
     assert np.nanmin(lows[np.isfinite(lows)]) == pytest.approx(0.5, abs=1e-15)
 
 
+def test_crossings_take_the_next_sample_from_the_rolled_argmax_to_the_bit():
+    """The next sample's driving curve and envelope are this sample's rolled by one, not a
+    second argmax over the rolled curves: the same troughs to the bit, ties, NaN (a chain
+    that does not assemble) and hand-overs at the turn's end included."""
+    rng = np.random.default_rng(3)
+    f = np.round(rng.normal(size=(5, 7, 40)), 1)            # rounded: many ties
+    f[1, 2, 5:9] = np.nan
+    nxt = np.roll(f, -1, axis=2)                             # the two argmaxes, as before
+    a, b = f.argmax(axis=0), nxt.argmax(axis=0)
+    pick = lambda g, c: np.take_along_axis(g, c[None], axis=0)[0]   # noqa: E731
+    fa0, fa1, fb0, fb1 = pick(f, a), pick(nxt, a), pick(f, b), pick(nxt, b)
+    gap0, gap1 = fa0 - fb0, fa1 - fb1
+    with np.errstate(all="ignore"):
+        t = np.clip(gap0 / np.where(gap0 != gap1, gap0 - gap1, 1.0), 0.0, 1.0)
+        before = np.where(a != b, np.maximum(fa0 + t * (fa1 - fa0), 0.0), np.inf)
+        now = _crossings(f)
+    assert np.array_equal(now, before, equal_nan=True)
+    assert np.isfinite(now).any() and np.isinf(now).any()
+
+
 def test_screening_filters_and_counts():
     p = load_problem(DISC)
     s = screen(p, 6, 256)

@@ -53,6 +53,7 @@ docs-quick: $(STAMP)
 	$(PY) benchmarks/dynamics_paper_case.py
 	$(PY) benchmarks/robust_cost.py
 	$(PY) benchmarks/atlas_scaling.py
+	$(PY) benchmarks/sweeps_compiled.py
 	$(PY) benchmarks/command_latency.py --rounds 5
 	$(PY) benchmarks/figure_cost.py
 	$(PY) benchmarks/docs.py --splice

@@ -8,7 +8,7 @@ Per problem of the race (``benchmarks/solve_vs_peers.py``'s ``CASES``):
   still verified its answer would spend; the median of ``--repeats``;
 * **our first solve**: ``solve(problem)`` in a fresh process (imports done, the clock around
   the call alone) with the NLP's compiled library in the cache; the solver's imports
-  (``optdesign.solver.driver``: scipy's stats and optimize, about a second), which a solve
+  (``optdesign.solver.driver``: CasADi's and scipy.optimize's above all), which a solve
   pays once per process, measured on their own just before it;
 * **our warm solve**: the next ``--repeats`` calls in that process (medians), each stage of
   it (``timings_s``: the NLP's build, the screening, the IPOPT runs, the exact verification;

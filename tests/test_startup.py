@@ -21,10 +21,10 @@ PROBE = ("import sys, json\n{code}\n"
          "print(json.dumps([n for n in {heavy!r} if n in sys.modules]))\n")
 
 
-def _start(code: str) -> subprocess.Popen:
+def _start(code: str, env: dict | None = None) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-c", PROBE.format(code=code, heavy=HEAVY)],
                             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
+                            text=True, env=env)
 
 
 def _heavy(proc: subprocess.Popen) -> set[str]:
@@ -52,3 +52,17 @@ def test_analyze_imports_only_what_one_exact_evaluation_needs():
     found = _heavy(proc)
     assert found <= allowed, f"analyze imported {sorted(found - allowed)}"
     assert {"matplotlib", "pandas", "dask", "scipy.stats", "tqdm"}.isdisjoint(found)
+
+
+def test_a_solve_reads_its_sobol_sample_from_the_cache_without_scipy_stats(tmp_path):
+    """scipy.stats is half a second of imports, needed only to draw the screening's scrambled
+    Sobol sample: the first process draws it and keeps it in the user's cache, a later one
+    reads it back (optdesign/numerics/sobol.py)."""
+    import os
+
+    env = dict(os.environ, XDG_CACHE_HOME=str(tmp_path), OPTDESIGN_COMPILE="load")
+    code = ("from optdesign import solve\n"
+            "assert solve('problems/sharkov2022_disc.yaml').status == 'optimal'")
+    found = [_heavy(_start(code, env)) for _ in range(2)]      # one after the other
+    assert "scipy.stats" in found[0] and "scipy.stats" not in found[1]
+    assert list((tmp_path / "optdesign").glob("sobol-*.npy"))

@@ -15,10 +15,10 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.stats import qmc
 
 from optdesign.envelope.sampled import STROKE_SIGNS, driving_speeds, ripple_of
 from optdesign.evaluation.figures import eccentricities_of
+from optdesign.numerics import sobol
 from optdesign.quantities import get_quantity
 from optdesign.quantities.criteria import (SectionConstraint, TransmissionAngle, constraints_of,
                                            objective_of, quantity_specs)
@@ -80,9 +80,8 @@ def screen(problem, count: int, n_designs: int, extra: list[dict] = (),
         n_designs *= WIDE_FACTOR
     rows = [np.array([d[k] for k in free]) for d in [base, *extra]]
     if free:
-        sobol = qmc.Sobol(d=len(free), scramble=True, seed=problem.solver.seed)
-        m = max(1, int(math.ceil(math.log2(max(n_designs, 2)))))
-        rows += list(spread(sobol.random_base2(m)[:n_designs], lower, upper))
+        rows += list(spread(sobol.unit_sample(len(free), n_designs, problem.solver.seed),
+                            lower, upper))
     X = np.array(rows).reshape(len(rows), len(free))
     missed: dict = {}
     score, violation = sampled_scores(problem, count, base, free, X, sampled, missed)
@@ -140,7 +139,7 @@ def spread(unit: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray
     """Points of the unit cube spread over the box: evenly where a range spans less than
     :data:`LOG_SPAN`, evenly in the logarithm where it spans more (the NLP's own scaling,
     by the geometric mean of the bounds, is logarithmic too)."""
-    out = qmc.scale(unit, lower, upper) if len(unit) else unit.reshape(0, len(lower))
+    out = sobol.scale(unit, lower, upper) if len(unit) else unit.reshape(0, len(lower))
     logarithmic = wide(lower, upper)
     if np.any(logarithmic) and len(unit):
         lo, hi = lower[logarithmic], upper[logarithmic]

@@ -3,10 +3,10 @@ sample of the box of free lengths, kept only where the linkage assembles."""
 from __future__ import annotations
 
 import numpy as np
-from scipy.stats import qmc
 
 from optdesign.errors import AssemblyError, ProblemError
 from optdesign.evaluation.design import Design
+from optdesign.numerics import sobol
 
 
 def assembles(design: Design, eccentricities) -> bool:
@@ -32,8 +32,8 @@ def start_designs(problem, count: int, n_starts: int, max_tries: int = 512) -> l
         return out[:1]
     lower = np.array([problem.design[k].lower for k in free])
     upper = np.array([problem.design[k].upper for k in free])
-    sobol = qmc.Sobol(d=len(free), scramble=True, seed=problem.solver.seed)
-    points = qmc.scale(sobol.random(max_tries), lower, upper)
+    points = sobol.scale(sobol.unit_sample(len(free), max_tries, problem.solver.seed),
+                         lower, upper)
     for row in points:
         if len(out) >= n_starts:
             break

@@ -38,9 +38,10 @@ def recipe_of(problem) -> compiled.Recipe:
 
 
 def nlp_files(where) -> list[str]:
-    """The names of the NLPs' files in the cache folder (the lanes' code kept beside them,
-    numerics/lanes.py, aside)."""
-    return sorted(p.name for p in where.iterdir() if not p.name.startswith("lanes-"))
+    """The names of the NLPs' files in the cache folder (the lanes' code and the Sobol
+    samples kept beside them, numerics/lanes.py and numerics/sobol.py, aside)."""
+    return sorted(p.name for p in where.iterdir()
+                  if not p.name.startswith(("lanes-", "sobol-")))
 
 
 def wait_for_build(where, name, timeout=300.0) -> None:

@@ -33,6 +33,19 @@ def _no_nlp_built_under_a_patch(request):
 
 
 @pytest.fixture
+def own_cache(tmp_path, monkeypatch):
+    """An empty cache folder of the user's own, read and written (numerics/user_cache.py)."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    monkeypatch.setenv("OPTDESIGN_COMPILE", "on")
+    return tmp_path / "optdesign"
+
+
+def kept_files(where: Path, prefix: str) -> list[Path]:
+    """The files of one kind (``lanes-``, ``sobol-``) kept in the cache folder ``where``."""
+    return sorted(p for p in where.iterdir() if p.name.startswith(prefix))
+
+
+@pytest.fixture
 def paper_design():
     from optdesign.evaluation.design import Design
     return Design("fourbar_converter", dict(PAPER))

@@ -13,6 +13,7 @@ import pytest
 from optdesign.numerics import lanes as lanes_module
 from optdesign.numerics.lanes import Lanes
 from optdesign.mechanisms import get_mechanism, known
+from tests.conftest import kept_files
 
 
 @pytest.mark.parametrize("name", known())
@@ -134,16 +135,8 @@ def test_an_error_in_the_helper_thread_is_raised_in_the_caller(monkeypatch):
         lanes(np.zeros((1, 2 * lanes_module.THREADED_CHUNK + 1)))
 
 
-@pytest.fixture
-def own_cache(tmp_path, monkeypatch):
-    """An empty cache folder of the user's own, read and written."""
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
-    monkeypatch.setenv("OPTDESIGN_COMPILE", "on")
-    return tmp_path / "optdesign"
-
-
 def _kept(where):
-    return sorted(p for p in where.iterdir() if p.name.startswith("lanes-"))
+    return kept_files(where, "lanes-")
 
 
 def _same(a, b, fn):

@@ -10,19 +10,11 @@ import pytest
 from scipy.stats import qmc
 
 from optdesign.numerics import sobol
-from tests.conftest import ROOT
-
-
-@pytest.fixture
-def own_cache(tmp_path, monkeypatch):
-    """An empty cache folder of the user's own, read and written."""
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
-    monkeypatch.setenv("OPTDESIGN_COMPILE", "on")
-    return tmp_path / "optdesign"
+from tests.conftest import ROOT, kept_files
 
 
 def _kept(where):
-    return sorted(p for p in where.iterdir() if p.name.startswith("sobol-"))
+    return kept_files(where, "sobol-")
 
 
 @pytest.mark.parametrize("d, n, seed", [(1, 512, 0), (4, 512, 0), (5, 4096, 3), (3, 300, 7)])

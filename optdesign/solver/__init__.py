@@ -3,8 +3,9 @@
 A notebook calls :func:`optdesign.api.solve` (``from optdesign import solve``), which takes a
 problem, a path or a mapping and validates it as the loader does; this package is its engine.
 
-The driver (and through it the screening) is imported when a name of it is first asked for: ``analyze`` reads :mod:`optdesign.solver.verify` and never solves. ``verify`` is
-bound here at once, because it is also the name of a submodule, and a submodule imported later
+The driver (and through it the screening) is imported when a name of it is first asked for:
+``analyze`` reads :mod:`optdesign.solver.verify` and never solves. ``verify`` is bound here at
+once, because it is also the name of a submodule, and a submodule imported later
 would otherwise shadow the function on the package.
 """
 from importlib import import_module

@@ -18,8 +18,9 @@ each three ways, alternating for ``--pairs`` rounds so that all three meet the s
   repository's history into a temporary folder and run from there;
 * **virtual machine**: this code with ``OPTDESIGN_COMPILE=off``;
 * **compiled**: this code with ``OPTDESIGN_COMPILE=load`` (the libraries in the user's cache).
- "Same answer": the front's points
-(pareto.csv) and the atlas's cells (atlas.csv) of the first pair equal in every column but the
+
+"Same answer": the front's points (pareto.csv) and the atlas's cells (atlas.csv) of the first
+round equal in every column but the
 times and the warm starts' count, and the front's hypervolume (``optdesign.fronts.indicators``)
 equal to the bit; "largest δ gap", the most any point's or cell's δ differs between the two
 runs (an atlas on two workers warm-starts a cell from the neighbours solved before it, which

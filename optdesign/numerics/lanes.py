@@ -206,9 +206,7 @@ def _translator() -> bytes:
 def _cache_of(fn: ca.Function) -> tuple[Path | None, str]:
     """(the cache folder, the digest of ``fn``'s code); no folder under
     ``OPTDESIGN_COMPILE=off`` or where the user has none."""
-    if user_cache.mode() == "off":
-        return None, ""
-    where = user_cache.folder()
+    where = user_cache.in_use()
     if where is None:
         return None, ""
     try:
@@ -219,15 +217,13 @@ def _cache_of(fn: ca.Function) -> tuple[Path | None, str]:
     return where, hashlib.sha256(_translator() + text.encode()).hexdigest()
 
 
-def _path(where: Path, digest: str) -> Path:
-    return where / f"lanes-{digest[:40]}.marshal"
+def _name(digest: str) -> str:
+    return f"lanes-{digest[:40]}.marshal"
 
 
 def _cached(where: Path | None, digest: str) -> types.CodeType | None:
     """The kept code of ``digest``, or None (none kept, or a file not to be trusted)."""
-    if where is None:
-        return None
-    body = user_cache.trusted(_path(where, digest), CACHE_TAG, digest)
+    body = user_cache.kept(where, _name(digest), CACHE_TAG, digest)
     if body is None:
         return None
     try:
@@ -239,11 +235,7 @@ def _cached(where: Path | None, digest: str) -> types.CodeType | None:
 
 def _keep(where: Path, digest: str, code: types.CodeType) -> None:
     """``code`` into the cache (a failure costs the next process the compile alone)."""
-    body = marshal.dumps(code)
-    try:
-        user_cache.write(_path(where, digest), body + user_cache.trailer(CACHE_TAG, digest, body))
-    except OSError as exc:
-        user_cache.log.debug("the lanes of %s not kept (%s)", digest[:12], exc)
+    user_cache.keep(where / _name(digest), CACHE_TAG, digest, marshal.dumps(code))
 
 
 def _literal(value: float) -> str:

@@ -53,9 +53,7 @@ def scale(unit: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
 
 def _cache_of(d: int, n: int, seed: int):
     """(the cache folder or None, the digest of the sample's recipe)."""
-    if user_cache.mode() == "off":
-        return None, ""
-    where = user_cache.folder()
+    where = user_cache.in_use()
     if where is None:
         return None, ""
     import scipy        # the package's version alone: scipy.stats is not imported
@@ -64,10 +62,12 @@ def _cache_of(d: int, n: int, seed: int):
     return where, hashlib.sha256(recipe.encode()).hexdigest()
 
 
+def _name(digest: str) -> str:
+    return f"sobol-{digest[:40]}.npy"
+
+
 def _cached(where, digest: str) -> np.ndarray | None:
-    if where is None:
-        return None
-    body = user_cache.trusted(where / f"sobol-{digest[:40]}.npy", CACHE_TAG, digest)
+    body = user_cache.kept(where, _name(digest), CACHE_TAG, digest)
     if body is None:
         return None
     try:
@@ -81,9 +81,4 @@ def _keep(where, digest: str, sample: np.ndarray) -> None:
     """``sample`` into the cache (a failure costs the next process the draw alone)."""
     buffer = io.BytesIO()
     np.save(buffer, np.ascontiguousarray(sample, dtype=np.float64), allow_pickle=False)
-    body = buffer.getvalue()
-    try:
-        user_cache.write(where / f"sobol-{digest[:40]}.npy",
-                         body + user_cache.trailer(CACHE_TAG, digest, body))
-    except OSError as exc:
-        user_cache.log.debug("the Sobol sample %s not kept (%s)", digest[:12], exc)
+    user_cache.keep(where / _name(digest), CACHE_TAG, digest, buffer.getvalue())

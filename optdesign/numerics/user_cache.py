@@ -61,6 +61,27 @@ def folder(env=os.environ) -> Path | None:
     return path
 
 
+def in_use(env=os.environ) -> Path | None:
+    """The folder a process reads kept files from and writes them to: :func:`folder`, or
+    None under ``OPTDESIGN_COMPILE=off``."""
+    return None if mode(env) == "off" else folder(env)
+
+
+def kept(where: Path | None, name: str, tag: str, digest: str) -> bytes | None:
+    """The :func:`trusted` body of the file ``name`` in ``where``; None where there is no
+    folder in use (:func:`in_use`), no such file, or a file not to be trusted."""
+    return None if where is None else trusted(where / name, tag, digest)
+
+
+def keep(path: Path, tag: str, digest: str, body: bytes) -> None:
+    """``body`` into the cache as ``path``, sealed with its :func:`trailer`, atomically; a
+    failure is logged and costs the next process the making alone."""
+    try:
+        write(path, body + trailer(tag, digest, body))
+    except OSError as exc:
+        log.debug("%s not kept (%s)", path.name, exc)
+
+
 def trailer(tag: str, digest: str, body: bytes) -> bytes:
     """What a cached file carries after its last byte: its tag, the digest of what it was
     made from and the checksum of ``body``, the bytes before it."""

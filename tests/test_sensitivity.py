@@ -203,3 +203,21 @@ def test_a_chain_s_gradients_come_from_its_own_function_bit_for_bit(mechanism, c
             got = _gradient_function(mechanism, count, options, k)(angles, lengths)
             for a, b in zip(got, reference(angles, lengths)):
                 assert np.array_equal(np.array(a), np.array(b), equal_nan=True)
+
+
+@pytest.mark.parametrize("path, count", [("sharkov2022_disc.yaml", 6),
+                                         ("pareto_fourbar.yaml", 4), ("vergov.yaml", 2)])
+def test_the_evaluation_s_sampling_and_stationary_points_give_the_same_block(path, count):
+    """The sensitivities read the evaluation's grid sampling and its runs' stationary points
+    (found by the exact evaluator on the same grid); found afresh, every figure of the block
+    is the same to the bit."""
+    problem = load_problem(ROOT / "problems" / path)
+    values = problem.start_values() | {problem.model.count_variable: count}
+    ev = evaluate_problem(problem, values)
+    assert all(x.sampled is not None and x.grid is not None for x in ev.per_e)
+    assert any(run.stationary for x in ev.per_e for run in x.runs)
+    bare = replace(ev, per_e=[replace(x, sampled=None, grid=None,
+                                      runs=[replace(r, stationary=None) for r in x.runs])
+                              for x in ev.per_e])
+    assert sensitivities(problem, values, ev).to_dict() == \
+        sensitivities(problem, values, bare).to_dict()

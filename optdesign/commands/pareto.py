@@ -99,7 +99,7 @@ def run(args) -> int:
     with FigureProcess(enabled=not args.no_report, warm=partial(warm_up, problem)) as figures:
         with phase("imports"):
             from optdesign.fronts import sweep
-            from optdesign.fronts.files import write_front
+            from optdesign.fronts.files import front_files
             from optdesign.fronts.report import summary_text
             from optdesign.outputs.units import input_speed_text
         # one run at a time in ``out``; a fresh sweep clears the previous one's files first,
@@ -112,7 +112,7 @@ def run(args) -> int:
                 result = sweep(problem, out, points=args.points, workers=args.workers,
                                resume=args.resume, scheduler=scheduler)
             with phase("files"):
-                files = write_front(result, out)
+                files = front_files(out)            # the sweep wrote them as it ended
                 print_answer(f"{problem.name}: {input_speed_text(problem.input_speed)}",
                              summary_text(result))
             if not args.no_report:

@@ -9,7 +9,7 @@ active, ∫ f_c dφ = s·(θ_k(v) - θ_k(u)), so the mean is a sum of exact angl
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -33,6 +33,9 @@ class Run:
     start: float
     end: float
     curve: int          # index into the stacked curves; the last one is the output at rest
+    #: the active curve's stationary points inside the run (:func:`stationary_angles` on the
+    #: grid the run was found on), where :func:`exact_figures` located them; None otherwise
+    stationary: tuple | None = field(default=None, compare=False)
 
 
 class Curves:
@@ -84,7 +87,8 @@ def search_grid(design, eccentricity: float = 1.0, n_grid: int = DEFAULT_GRID) -
 def exact_figures(design, stroke: str, input_speed: float, eccentricity: float = 1.0,
                   n_grid: int = DEFAULT_GRID, sampled: dict | None = None,
                   phi: np.ndarray | None = None) -> tuple[StrokeFigures, list[Run]]:
-    """Exact ω_max, ω_min, time mean, δ and ratio of one stroke; also the envelope's runs.
+    """Exact ω_max, ω_min, time mean, δ and ratio of one stroke; also the envelope's runs,
+    each with the stationary points found inside it (``Run.stationary``).
 
     ``phi`` and ``sampled`` (``Design.sample`` on it) reuse a search grid that was sampled
     already; by default the grid is :func:`search_grid` and is sampled here.
@@ -100,8 +104,10 @@ def exact_figures(design, stroke: str, input_speed: float, eccentricity: float =
     theta = sampled["theta"]
     runs = _runs(curves, phi, f)
     values = [f.max(axis=0).clip(min=0.0)]               # grid values: never beyond the truth
-    for run in runs:
-        values.append(_stationary_values(curves, run, phi, df))
+    for i, run in enumerate(runs):
+        angles = stationary_angles(curves, run, phi, df)
+        runs[i] = replace(run, stationary=tuple(angles))  # kept: the sensitivities' points
+        values.append(_stationary_values(curves, angles))
         values.append(_envelope_at(curves, np.array([run.start, run.end])))
     for b in breaks:                                      # one-sided limits at jumps of f
         values.append(_envelope_at(curves, np.array([b - 1e-10, b + 1e-10])))
@@ -189,10 +195,9 @@ def _inside(run: Run, phi: np.ndarray) -> np.ndarray:
     return idx[np.argsort(shifted[idx])]
 
 
-def _stationary_values(curves: Curves, run: Run, phi: np.ndarray, df: np.ndarray):
-    """Values of the active curve at its stationary points inside the run (f' = 0)."""
-    return np.array([curves.point(x % TWO_PI)[0].max()
-                     for x in stationary_angles(curves, run, phi, df)])
+def _stationary_values(curves: Curves, angles: list) -> np.ndarray:
+    """Values of the envelope at a run's stationary points (``angles``, f' = 0)."""
+    return np.array([curves.point(x % TWO_PI)[0].max() for x in angles])
 
 
 def stationary_angles(curves: Curves, run: Run, phi: np.ndarray, df: np.ndarray) -> list:

@@ -34,6 +34,8 @@ class EccentricityEvaluation:
     #: the design sampled on the search grid (theta, dtheta, ddtheta, cos_mu): what the turn
     #: quantities read instead of sampling it again
     sampled: dict | None = field(default=None, repr=False, compare=False)
+    #: the search grid ``sampled`` and the runs' stationary points were found on
+    grid: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
     def sequence(self) -> tuple[int, ...]:
@@ -170,7 +172,7 @@ def _evaluate_at(design: Design, stroke: str, input_speed: float, e: float,
     cos_mu = sampled["cos_mu"]
     extremes = np.concatenate([phi[np.argmax(cos_mu, axis=1)], phi[np.argmin(cos_mu, axis=1)]])
     return EccentricityEvaluation(e, figures, runs, phi[np.argmax(speeds, axis=1)],
-                                  angles, extremes, sampled)
+                                  angles, extremes, sampled, phi)
 
 
 def evaluate_problem(problem, values=None, strokes: tuple[str, ...] | None = None,

@@ -224,10 +224,13 @@ class _EccentricitySlopes:
         e, where = x.eccentricity, f"e = {x.eccentricity:g}"
         curves = Curves(design, ev.stroke, e)
         phi = search_grid(design, e)
-        sampled = design.sample(phi, e)
+        # the evaluation's own sampling and stationary points, where it searched this grid
+        # (the same values: found again here otherwise)
+        known = x.sampled is not None and x.grid is not None and np.array_equal(x.grid, phi)
+        sampled = x.sampled if known else design.sample(phi, e)
         _, df = curves.stack(sampled)
         points = _Points(design, e)
-        candidates = _envelope_candidates(curves, x.runs, phi, df, sampled, points)
+        candidates = _envelope_candidates(curves, x.runs, phi, df, sampled, points, known)
         ends = _run_ends(curves, x.runs, points)
         chains = _least_angle_points(design, e, x, points)
         points.evaluate()                             # one mapped call per chain
@@ -354,14 +357,17 @@ def _chains(curves: Curves, *indices: int) -> set[int]:
     return {curves.split(c)[0] for c in indices if c != curves.m - 1}
 
 
-def _envelope_candidates(curves: Curves, runs, phi, df, sampled,
-                         points: _Points) -> list[_Candidate]:
+def _envelope_candidates(curves: Curves, runs, phi, df, sampled, points: _Points,
+                         known: bool = False) -> list[_Candidate]:
     """Every point the exact evaluator takes the envelope's extremes from (its grid values
-    never exceed them), registered with ``points``."""
+    never exceed them), registered with ``points``; ``known``: the runs' stationary points
+    were found on ``phi`` (:attr:`~optdesign.envelope.exact.Run.stationary`)."""
     out = []
     for run in runs:
+        angles = run.stationary if known and run.stationary is not None else \
+            stationary_angles(curves, run, phi, df)
         out += [_Candidate("stationary", points.add(x, _chains(curves, run.curve)),
-                           c=run.curve) for x in stationary_angles(curves, run, phi, df)]
+                           c=run.curve) for x in angles]
     if len(runs) > 1:
         for before, run in zip([runs[-1]] + runs[:-1], runs):
             chains = _chains(curves, before.curve, run.curve)

@@ -8,8 +8,14 @@ from optdesign.outputs.atomic import atomic_write_bytes, atomic_write_json
 
 
 def write_front(result, out_dir: str | Path) -> list[Path]:
-    """pareto.csv and pareto.json."""
-    out = Path(out_dir)
+    """pareto.csv and pareto.json (:func:`front_files`)."""
+    csv_path, json_path = front_files(out_dir)
     csv = result.points.drop(columns=["index"]).to_csv(index=False, float_format="%.10g")
-    return [atomic_write_bytes(out / "pareto.csv", csv.encode("utf-8")),
-            atomic_write_json(out / "pareto.json", result.to_dict())]
+    return [atomic_write_bytes(csv_path, csv.encode("utf-8")),
+            atomic_write_json(json_path, result.to_dict())]
+
+
+def front_files(out_dir: str | Path) -> list[Path]:
+    """Where :func:`write_front` writes: pareto.csv and pareto.json in ``out_dir``."""
+    out = Path(out_dir)
+    return [out / "pareto.csv", out / "pareto.json"]

@@ -274,7 +274,7 @@ class _Sweep:
         finally:
             self.bar.close()
             self.ex.close(interrupted)
-        result = _rebuild(self.problem, self.done, self.out, self.settings)
+        result = _rebuild(self.problem, self.done, self.out, self.settings, write=False)
         self.say(f"done: {len(self.done)} solves journalled ({self.n_resumed} resumed)")
         result.run.update({"wall_time_s": time.perf_counter() - self.t0,
                            "resumed_points": self.n_resumed,
@@ -466,8 +466,10 @@ def _reverify(problem, done: dict, journal: Journal) -> None:
                                f"it is left as it is: run without --resume to start afresh")
 
 
-def _rebuild(problem, done: dict, out: Path, settings: dict) -> ParetoResult:
-    """The front from every finished record, pareto.csv/json rewritten atomically."""
+def _rebuild(problem, done: dict, out: Path, settings: dict,
+             write: bool = True) -> ParetoResult:
+    """The front from every finished record; with ``write``, pareto.csv/json rewritten
+    atomically (the last rebuild writes them once, with the run's wall time)."""
     axis = axis_of(problem)
     section = problem.sections.get("pareto") or ParetoSection()
     records = refine.visible(list(done.values()), list(problem.model.lengths))
@@ -477,5 +479,6 @@ def _rebuild(problem, done: dict, out: Path, settings: dict) -> ParetoResult:
     ends = [r for r in records if isinstance(r["key"][1], str)]
     result = ParetoResult(points, overall, per_count, run=dict(settings), ends=ends,
                           count_name=model.count_variable, criteria_columns=columns)
-    write_front(result, out)
+    if write:
+        write_front(result, out)
     return result

@@ -62,17 +62,18 @@ def turn_maxima(function, derivative, p: np.ndarray, phi: np.ndarray,
     values, angles = grid.max(axis=1), phi[grid.argmax(axis=1)].astype(float)
     n = phi.size
     constant = np.ptp(grid, axis=1) <= 64 * np.finfo(float).eps * np.abs(grid).max(axis=1)
+    # a grid peak (a plateau is none: its value is the grid's) can gain at most about its
+    # second difference by refining; peaks farther below the maximum are passed over
+    left, right = np.roll(grid, 1, axis=1), np.roll(grid, -1, axis=1)
+    curvature = np.abs(left - 2 * grid + right)
+    with np.errstate(invalid="ignore"):
+        peaked = (grid >= left) & (grid >= right) & ((grid > left) | (grid > right)) & \
+            (grid + 4 * curvature >= values[:, None]) & np.isfinite(grid)
     for i in range(grid.shape[0]):
         row = grid[i]
         if constant[i]:
             continue                      # constant but for rounding (a crank pin's radius)
-        left, right = np.roll(row, 1), np.roll(row, -1)
-        curvature = np.abs(left - 2 * row + right)
-        # a grid peak (a plateau is none: its value is the grid's) can gain at most about its
-        # second difference by refining; peaks farther below the maximum are passed over
-        peaks = np.nonzero((row >= left) & (row >= right) & ((row > left) | (row > right)) &
-                           (row + 4 * curvature >= values[i]) & np.isfinite(row))[0]
-        for j in peaks:
+        for j in np.nonzero(peaked[i])[0]:
             lo = phi[j - 1] - (TWO_PI if j == 0 else 0.0)
             hi = phi[(j + 1) % n] + (TWO_PI if j == n - 1 else 0.0)
             x = _stationary(lambda t: dg_at(t % TWO_PI, p)[i], lo, phi[j], hi,

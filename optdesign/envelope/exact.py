@@ -47,6 +47,7 @@ class Curves:
         self.signs = STROKE_SIGNS[stroke]
         self.n = design.count
         self.m = self.n * len(self.signs) + 1
+        self._chains: dict = {}          # chain k -> its bound call (Design.chain_call)
 
     def split(self, c: int) -> tuple[int, int]:
         return c % self.n, self.signs[c // self.n]
@@ -73,7 +74,10 @@ class Curves:
         if c == self.m - 1:
             return 0.0, 0.0
         k, s = self.split(c)
-        _, dtheta, ddtheta, _, _ = self.design.chain_at(phi, k, self.ecc)
+        chain = self._chains.get(k)
+        if chain is None:
+            chain = self._chains[k] = self.design.chain_call(k, self.ecc)
+        _, dtheta, ddtheta, _, _ = chain(phi)
         return s * dtheta, s * ddtheta
 
 

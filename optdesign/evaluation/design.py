@@ -112,9 +112,15 @@ class Design:
     def chain_at(self, phi: float, k: int, eccentricity: float = 1.0) -> tuple[float, ...]:
         """θ_k, dθ_k/dφ, d²θ_k/dφ², cos μ_k and d cos μ_k/dφ of chain k alone at one crank
         angle (the other chains are not evaluated)."""
-        out = buffered(self.model.chain(self.count, self.option_key, k))(
-            float(phi), self.p_fixed(eccentricity))
-        return tuple(out.tolist())
+        return self.chain_call(k, eccentricity)(phi)
+
+    def chain_call(self, k: int, eccentricity: float = 1.0):
+        """:meth:`chain_at` of chain k at ``eccentricity`` as a function of the crank angle
+        alone, its CasADi call bound once (this thread's buffers): a root search's inner
+        loop, which calls it a few dozen times."""
+        call = buffered(self.model.chain(self.count, self.option_key, k))
+        p = self.p_fixed(eccentricity)
+        return lambda phi: tuple(call(float(phi), p).tolist())
 
     def largest_cos(self, k: int, lo: float, hi: float, eccentricity: float = 1.0,
                     xatol: float = 1e-12) -> tuple[float, float]:
@@ -123,7 +129,8 @@ class Design:
         search every check, figure and sensitivity of the transmission angle refines with."""
         from scipy.optimize import minimize_scalar
 
-        res = minimize_scalar(lambda x: -abs(self.chain_at(x % TWO_PI, k, eccentricity)[3]),
+        chain = self.chain_call(k, eccentricity)
+        res = minimize_scalar(lambda x: -abs(chain(x % TWO_PI)[3]),
                               bounds=(lo, hi), method="bounded", options={"xatol": xatol})
         return float(res.x), float(-res.fun)
 

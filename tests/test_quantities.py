@@ -120,3 +120,28 @@ def test_quantities_share_one_model_and_keep_their_own_arithmetic(mechanism):
             want = [np.array(v) for v in reference(angles, lengths)]
             got = [np.array(f(angles, lengths)) for f in shared]
             assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(got, want))
+
+
+def test_the_grid_peaks_of_every_row_at_once_are_each_row_s_own():
+    """turn_maxima finds the peaks of every component in one pass over the grid: the same
+    samples as the former loop over the rows, each row rolled alone (plateaus, a row's
+    wrap-around, NaN and inf among them)."""
+    from optdesign.quantities.extremes import grid_peaks
+
+    rng = np.random.default_rng(3)
+    grid = np.round(rng.normal(size=(9, 64)), 1)          # rounded: plateaus and ties
+    grid[2, 5] = np.nan
+    grid[3, 7] = np.inf
+    grid[4] = np.sin(np.linspace(0.0, 2 * np.pi, 64, endpoint=False) + 0.05)  # a peak at 0
+    grid[5] = 1.0                                          # constant
+
+    def row_alone(row):
+        left, right = np.roll(row, 1), np.roll(row, -1)
+        curvature = np.abs(left - 2 * row + right)
+        with np.errstate(invalid="ignore"):
+            return (row >= left) & (row >= right) & ((row > left) | (row > right)) & \
+                (row + 4 * curvature >= row.max()) & np.isfinite(row)
+
+    expected = np.array([row_alone(row) for row in grid])
+    assert np.array_equal(grid_peaks(grid), expected)
+    assert expected.sum() > 9 and expected[4].any() and not expected[5].any()

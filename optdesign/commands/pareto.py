@@ -70,7 +70,6 @@ def run(args) -> int:
         from functools import partial
 
         from optdesign.errors import ProblemError
-        from optdesign.figures.design import warm_up
         from optdesign.lifetime import exit_on_sigterm
         from optdesign.outputs.answer import print_answer, raise_if_unprinted
         from optdesign.outputs.checks import prepare_out, resolve_out
@@ -96,7 +95,8 @@ def run(args) -> int:
                       record=False)
     # the report's figures are drawn beside, by a process forked before any thread or worker
     # (a Dask client, the sweep's pool) exists; it imports matplotlib while the sweep runs
-    with FigureProcess(enabled=not args.no_report, warm=partial(warm_up, problem)) as figures:
+    with FigureProcess(enabled=not args.no_report, warm=partial(_warm_figures, problem)) \
+            as figures:
         with phase("imports"):
             from optdesign.fronts import sweep
             from optdesign.fronts.files import front_files
@@ -126,6 +126,20 @@ def run(args) -> int:
     raise_if_unprinted()
     print(f"wrote {', '.join(str(f) for f in files)}")
     return 0 if result.indicators["n_points"] else 1
+
+
+def _warm_figures(problem) -> None:
+    """The figures' process's warm-up while the sweep runs: matplotlib and the problem's
+    kinematics (:func:`optdesign.figures.design.warm_up`), and what reading the report's jobs
+    needs (pandas for the front's table, the report's plots): imported after the sweep, they
+    held the figures back a third of a second."""
+    import pandas  # noqa: F401
+
+    import optdesign.commands.files  # noqa: F401
+    import optdesign.fronts.report  # noqa: F401
+    from optdesign.figures.design import warm_up
+
+    warm_up(problem)
 
 
 def _connected(address):

@@ -62,13 +62,7 @@ def turn_maxima(function, derivative, p: np.ndarray, phi: np.ndarray,
     values, angles = grid.max(axis=1), phi[grid.argmax(axis=1)].astype(float)
     n = phi.size
     constant = np.ptp(grid, axis=1) <= 64 * np.finfo(float).eps * np.abs(grid).max(axis=1)
-    # a grid peak (a plateau is none: its value is the grid's) can gain at most about its
-    # second difference by refining; peaks farther below the maximum are passed over
-    left, right = np.roll(grid, 1, axis=1), np.roll(grid, -1, axis=1)
-    curvature = np.abs(left - 2 * grid + right)
-    with np.errstate(invalid="ignore"):
-        peaked = (grid >= left) & (grid >= right) & ((grid > left) | (grid > right)) & \
-            (grid + 4 * curvature >= values[:, None]) & np.isfinite(grid)
+    peaked = grid_peaks(grid)
     for i in range(grid.shape[0]):
         row = grid[i]
         if constant[i]:
@@ -89,6 +83,18 @@ def turn_maxima(function, derivative, p: np.ndarray, phi: np.ndarray,
                 if v > values[i]:
                     values[i], angles[i] = v, x % TWO_PI
     return TurnMaxima(values, angles, constant)
+
+
+def grid_peaks(grid: np.ndarray) -> np.ndarray:
+    """Which samples of each row of ``grid`` (components × angles, periodic in the angle)
+    are a peak worth refining: a local maximum (a plateau is none: its value is the grid's)
+    that its second difference could lift to the row's maximum (a peak can gain at most
+    about that by refining; those farther below are passed over)."""
+    left, right = np.roll(grid, 1, axis=1), np.roll(grid, -1, axis=1)
+    curvature = np.abs(left - 2 * grid + right)
+    with np.errstate(invalid="ignore"):
+        return (grid >= left) & (grid >= right) & ((grid > left) | (grid > right)) & \
+            (grid + 4 * curvature >= grid.max(axis=1)[:, None]) & np.isfinite(grid)
 
 
 #: the secant steps on g' stop when a step is this small (rad): g is then within

@@ -2,13 +2,14 @@
 
 These functions run in worker processes (or on Dask workers): they take and return plain data
 (the frozen problem and dicts of floats), and each process keeps the NLPs it has built
-(:class:`~optdesign.solve.PhaseSolver`) so consecutive points of a chain re-solve the same NLP
-with a new ε parameter instead of rebuilding it.
+(:mod:`optdesign.solver.built`) so consecutive points of a chain re-solve the same NLP with a
+new ε parameter instead of rebuilding it. Each task solves on a :class:`PhaseSolver` of its
+own: a solver kept from the worker's earlier tasks would hand a solve the NLP of more
+hand-over slots an earlier point needed, on which IPOPT takes another path, so a point's
+iterations and last digits would depend on which points its worker happened to run before.
 """
 from __future__ import annotations
 
-import hashlib
-import pickle
 import time
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -26,16 +27,10 @@ LOOSE_MAX_RIPPLE = 10.0
 #: the largest-ratio design is re-solved for least ripple at this fraction below its ratio
 END_RATIO_BACKOFF = 1e-7
 
-_SOLVERS: dict = {}
-
-
 def _solver(problem, count: int) -> PhaseSolver:
-    key = (hashlib.sha256(pickle.dumps(problem)).hexdigest(), count)
-    if key not in _SOLVERS:
-        if len(_SOLVERS) > 8:
-            _SOLVERS.clear()
-        _SOLVERS[key] = PhaseSolver(problem, count)
-    return _SOLVERS[key]
+    """A task's own solver: its NLPs the process's kept ones of exactly the slots it asks for
+    (:mod:`optdesign.solver.built`), whatever the worker solved before."""
+    return PhaseSolver(problem, count)
 
 
 def criteria_columns(problem, values: dict) -> dict:

@@ -80,3 +80,33 @@ def test_chains_walk_away_from_the_nearer_end():
     eps = np.linspace(0.5, 0.9, 10)
     assert _chains(list(range(1, 9)), eps, 4) == [[1, 2], [3, 4], [6, 5], [8, 7]]
     assert _chains([], eps, 2) == []
+
+
+
+
+def test_a_point_is_the_same_whatever_its_worker_solved_before():
+    """A point's record, iterations and multiplier included, does not depend on what its
+    worker process solved before it: each task solves on a solver of its own. (A worker kept
+    its solver from task to task, and with it every NLP an earlier task had built: the
+    slotted lever's largest-ratio end at n = 3 needs 12 hand-over slots where its other
+    points need 6, and a point solved after it, in a worker that had built no other, took
+    the 12-slot NLP and another path.)"""
+    from dataclasses import replace
+
+    from optdesign.fronts import worker
+
+    problem = load_problem("problems/pareto_slotted_forward.yaml")
+    low = worker.solve_end(problem, 3, "least_ripple")
+    epsilon = 0.5 * (low["ratio"] + 1.0)
+
+    def point(p):
+        rec = worker.solve_point(p, 3, 1, epsilon, low["design"], [])
+        assert rec["status"] == "optimal"
+        return {k: v for k, v in rec.items() if k != "time_s"}
+
+    # two copies of the problem (their names apart): each its own worker's, as it were
+    alone = point(replace(problem, name="first_task"))
+    after_the_end = replace(problem, name="after_the_end")
+    high = worker.solve_end(after_the_end, 3, "largest_ratio")
+    assert high["status"] == "optimal" and high["ratio"] > epsilon
+    assert point(after_the_end) == alone

@@ -116,8 +116,9 @@ class Design:
 
     def chain_call(self, k: int, eccentricity: float = 1.0):
         """:meth:`chain_at` of chain k at ``eccentricity`` as a function of the crank angle
-        alone, its CasADi call bound once (this thread's buffers): a root search's inner
-        loop, which calls it a few dozen times."""
+        alone, its CasADi call bound once: a root search's inner loop, which calls it a few
+        dozen times. It holds this thread's buffers (:func:`buffered`): call it in the
+        thread that made it."""
         call = buffered(self.model.chain(self.count, self.option_key, k))
         p = self.p_fixed(eccentricity)
         return lambda phi: tuple(call(float(phi), p).tolist())

@@ -5,8 +5,10 @@ d(ratio)/dl per mm and the derivative of the transmission-angle margin (least μ
 ``min_transmission_angle_deg``) in degrees per mm. Every derivative is exact: CasADi's
 symbolic gradients of the mechanism's θ_k, dθ_k/dφ and cos μ_k with respect to the lengths
 (one function per chain, mapped over the points that need it), evaluated at the points the
-exact evaluator (:mod:`optdesign.envelope.exact`) finds; no finite differences. One call costs about
-half an exact evaluation (≈ 10 ms at n = 6 and one eccentricity).
+exact evaluator (:mod:`optdesign.envelope.exact`) finds; no finite differences. The points
+are read off the evaluation where it searched the same grid (its sampling, each run's
+``stationary`` points), not searched again: one call costs a fifth to a third of an exact
+check (``benchmarks/sensitivity_cost.py``).
 
 - **ω_max, ω_min at a stationary point** of one curve (f_c' = 0): the envelope theorem,
   dω/dl = ∂f_c/∂l at (φ*, c) fixed.

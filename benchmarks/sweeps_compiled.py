@@ -5,8 +5,9 @@ two to four times faster with the same iterates; a Pareto sweep and an atlas are
 IPOPT runs. This measures what that gives a user, whole processes as the user waits for them
 (start-up, the sweep, the report and its figures):
 
-* ``optdesign pareto problems/pareto_fourbar.yaml --workers 2`` (the front of
-  ``benchmarks/pareto_vs_peers.py``'s first problem);
+* ``optdesign pareto P.yaml --workers 2`` for the four fronts of
+  ``benchmarks/pareto_vs_peers.py`` (pareto_fourbar, pareto_disc_three_counts,
+  pareto_slotted_forward, pareto_reverse_flat);
 * ``optdesign atlas`` of the 16-cell slice of ``benchmarks/atlas_scaling.py`` (n = 5–8 ×
   μ_min = 35–50°, ratio ≥ 0.3) with ``--workers 2``;
 
@@ -65,13 +66,17 @@ MODES = {"before": "off", "virtual machine": "off", "compiled": "load"}
 NOT_ANSWERS = re.compile(r"(^|_)(time|seconds|finished|started)(_|$)|_s$|^neighbours$")
 
 
+#: the fronts of ``benchmarks/pareto_vs_peers.py``, pareto_fourbar first
+FRONTS = ("pareto_fourbar", "pareto_disc_three_counts", "pareto_slotted_forward",
+          "pareto_reverse_flat")
+
+
 def commands(folder: Path) -> dict[str, tuple[list[str], str]]:
     """name: (the command without its --out, the table it writes)."""
-    return {"pareto_fourbar front": ([*OPTDESIGN, "pareto", str(ROOT / "problems" /
-                                                                "pareto_fourbar.yaml"),
-                                      "--workers", "2"], "pareto.csv"),
-            "atlas slice (16 cells)": ([*OPTDESIGN, "atlas", str(slice_file(folder)),
-                                        "--workers", "2"], "atlas.csv")}
+    fronts = {f"{name} front": ([*OPTDESIGN, "pareto", str(ROOT / "problems" / f"{name}.yaml"),
+                                 "--workers", "2"], "pareto.csv") for name in FRONTS}
+    return fronts | {"atlas slice (16 cells)": ([*OPTDESIGN, "atlas", str(slice_file(folder)),
+                                                 "--workers", "2"], "atlas.csv")}
 
 
 def answers(table: Path) -> pd.DataFrame:

@@ -26,7 +26,10 @@ times and the warm starts' count, and the front's hypervolume (``optdesign.front
 equal to the bit; "largest δ gap", the most any point's or cell's δ differs between the two
 runs (an atlas on two workers warm-starts a cell from the neighbours solved before it, which
 the order the workers finish in decides: its δ may move in the last digits between any two
-runs, compiled or not).
+runs, compiled or not). The code of ec4c3c0 moves a few of the slotted lever's points'
+iterations and multipliers between runs (its workers kept a solver, and with it NLPs of more
+hand-over slots, from task to task): its "same answer" reads no there, the designs, δ and the
+hypervolume equal to the bit.
 
 Before measuring, every NLP the runs build is compiled into the user's cache: each command is
 run with ``OPTDESIGN_COMPILE=on`` (which starts the build of an NLP it finds no library of,

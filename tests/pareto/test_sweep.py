@@ -10,6 +10,7 @@ from optdesign.fronts.sweep import grid
 from optdesign.fronts.section import ParetoSection
 from optdesign.problem.loader import load_problem
 from optdesign.solver import verify
+from tests.conftest import ROOT
 
 CONTRACT = ["phases", "delta", "ratio", "l0", "l1", "l2", "l2_prime", "l3", "status"]
 
@@ -95,7 +96,7 @@ def test_a_point_is_the_same_whatever_its_worker_solved_before():
 
     from optdesign.fronts import worker
 
-    problem = load_problem("problems/pareto_slotted_forward.yaml")
+    problem = load_problem(ROOT / "problems" / "pareto_slotted_forward.yaml")
     low = worker.solve_end(problem, 3, "least_ripple")
     epsilon = 0.5 * (low["ratio"] + 1.0)
 

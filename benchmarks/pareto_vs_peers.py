@@ -95,6 +95,7 @@ from pareto_scoring import (Normalisation, beaten_optima, checkpoint_times,  # n
                             domination_margin, format_margin, non_dominated, objectives, thin,
                             value_at)
 from solve_vs_peers import DesignerModel, validate  # noqa: E402
+from warm_cache import warm_up  # noqa: E402
 
 from optdesign.errors import OptDesignError  # noqa: E402
 from optdesign.outputs.atomic import atomic_write_text  # noqa: E402
@@ -201,9 +202,6 @@ def compile_first(cases, workers: int, log) -> None:
     (``benchmarks/warm_cache.py``): T_ours is a run on compiled derivatives, as every run
     after a problem's first (which runs on CasADi's virtual machine with the build beside
     it, a compiler taking a core)."""
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    from warm_cache import warm_up
-
     with tempfile.TemporaryDirectory(prefix="pareto_race_warm_") as tmp:
         for case in cases:
             warm_up(case, optdesign_command() + ["pareto", f"problems/{CASES[case]}",

@@ -182,9 +182,10 @@ class Design:
         chain = int(np.argmax(bad[:, j]))
         lo, hi = (phi[j - 1], phi[j]) if j > 0 else (phi[j], phi[j])
         if j > 0:
+            at = self.chain_call(chain, eccentricity)
             for _ in range(40):
                 mid = 0.5 * (lo + hi)
-                if abs(self.chain_at(mid, chain, eccentricity)[3]) <= 1.0:
+                if abs(at(mid)[3]) <= 1.0:
                     lo = mid
                 else:
                     hi = mid

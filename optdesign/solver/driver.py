@@ -412,9 +412,10 @@ class _Polishing:
     def apart(self) -> bool:
         """Whether the polishes so far ended apart: more than one optimum, or a polish that
         reached none (stalled, out of budget, infeasible). A count whose best basins lead to
-        different places is multimodal, and its next basins are worth polishing."""
+        different places is multimodal, and its next basins are worth polishing. A polish
+        stopped as it joined a known optimum's basin reached that optimum: not apart."""
         return len(self.optima) > 1 or any(
-            not r.feasible or r.ipopt_status not in SUCCESS + (JOINED,)
+            r.ipopt_status != JOINED and (not r.feasible or r.ipopt_status not in SUCCESS)
             for r in self.result.starts)
 
     def basins(self, seeds) -> None:

@@ -39,3 +39,47 @@ def test_without_the_rule_the_solve_stops_in_the_worse_basin(six_phases, monkeyp
     monkeypatch.setattr(driver._Polishing, "apart", lambda self: False)
     result = solve(six_phases)
     assert result.delta > 0.1416 + 1e-3
+
+
+def _record(status: str, feasible: bool):
+    from optdesign.solver.result import StartRecord
+    return StartRecord(start={}, ipopt_status=status, iterations=10, time_s=0.0,
+                       feasible=feasible, delta=0.2 if feasible else None)
+
+
+@pytest.mark.parametrize("second, apart", [
+    ((driver.JOINED, False), False),              # reached the first's optimum
+    ((driver.STALLED, False), True),              # reached none
+    ((driver.EXHAUSTED, False), True),
+    (("Infeasible_Problem_Detected", False), True),
+    (("Solve_Succeeded", False), True),           # converged, but the exact check rejects it
+    (("Solve_Succeeded", True), False),           # the same optimum (one in ``optima``)
+])
+def test_a_polish_that_joined_a_known_optimum_is_not_apart(six_phases, second, apart):
+    """``apart``: more than one optimum, or a polish that reached none. A polish stopped as
+    it entered a known optimum's basin (its record is not feasible: it ended at its start)
+    reached that optimum; it counted as apart, and so a second basin that joined the first
+    sent every solve on one worker through two more basins."""
+    from optdesign.solver.result import PhaseResult
+
+    result = PhaseResult(6, "failed")
+    result.starts = [_record("Solve_Succeeded", True), _record(*second)]
+    work = driver._Polishing(six_phases, 6, None, result)
+    work.optima = ["the first's optimum"]
+    assert work.apart() is apart
+
+
+def test_on_one_worker_a_basin_that_joins_ends_the_polishes():
+    """The shipped disc problem on one worker: the second basin joins the first's optimum,
+    and no further basin is polished; the answer is the one two workers find (where the two
+    best basins are polished at once, and the second converges to the same design)."""
+    problem = load_problem(ROOT / "problems" / "sharkov2022_disc.yaml")
+    alone = solve(replace(problem, solver=replace(problem.solver, workers=1)))
+    phase = alone.best_phase()
+    assert [s.ipopt_status for s in phase.starts][:2] == ["Solve_Succeeded", driver.JOINED]
+    assert phase.screening["polished"] == 2
+    both = solve(replace(problem, solver=replace(problem.solver, workers=2)))
+    assert alone.status == both.status == "optimal"
+    assert alone.delta == pytest.approx(both.delta, rel=1e-11)
+    for k, v in both.design.items():
+        assert alone.design[k] == pytest.approx(v, rel=1e-8), k

@@ -412,10 +412,9 @@ class _Polishing:
     def apart(self) -> bool:
         """Whether the polishes so far ended apart: more than one optimum, or a polish that
         reached none (stalled, out of budget, infeasible). A count whose best basins lead to
-        different places is multimodal, and its next basins are worth polishing. A polish
-        stopped as it joined a known optimum's basin reached that optimum: not apart."""
+        different places is multimodal, and its next basins are worth polishing."""
         return len(self.optima) > 1 or any(
-            r.ipopt_status != JOINED and (not r.feasible or r.ipopt_status not in SUCCESS)
+            not r.feasible or r.ipopt_status not in SUCCESS + (JOINED,)
             for r in self.result.starts)
 
     def basins(self, seeds) -> None:

@@ -412,7 +412,9 @@ class _Polishing:
     def apart(self) -> bool:
         """Whether the polishes so far ended apart: more than one optimum, or a polish that
         reached none (stalled, out of budget, infeasible). A count whose best basins lead to
-        different places is multimodal, and its next basins are worth polishing."""
+        different places is multimodal, and its next basins are worth polishing. A polish
+        stopped as it came near a known optimum (:data:`JOINED`) counts as one that reached
+        none: it may only pass by (``tests/solve/test_basins_apart.py``, on one worker)."""
         return len(self.optima) > 1 or any(
             not r.feasible or r.ipopt_status not in SUCCESS + (JOINED,)
             for r in self.result.starts)

@@ -39,3 +39,15 @@ def test_without_the_rule_the_solve_stops_in_the_worse_basin(six_phases, monkeyp
     monkeypatch.setattr(driver._Polishing, "apart", lambda self: False)
     result = solve(six_phases)
     assert result.delta > 0.1416 + 1e-3
+
+
+def test_on_one_worker_a_basin_that_only_passes_by_a_known_optimum_is_not_the_end(six_phases):
+    """Polished one after another (one worker: an atlas's cells, a front's ends), the second
+    basin is stopped as it comes near the first's optimum, which it only passes by (polished
+    beside the first, it exhausts its budget instead). That stop must not end the search as
+    if the two basins agreed: the basin ranked fourth holds the optimum."""
+    alone = replace(six_phases, solver=replace(six_phases.solver, workers=1))
+    result = solve(alone)
+    statuses = [s.ipopt_status for s in result.best_phase().starts]
+    assert statuses[1] == driver.JOINED
+    assert result.delta == pytest.approx(0.141649, abs=2e-6)

@@ -414,7 +414,8 @@ class _Polishing:
         reached none (stalled, out of budget, infeasible). A count whose best basins lead to
         different places is multimodal, and its next basins are worth polishing. A polish
         stopped as it came near a known optimum (:data:`JOINED`) counts as one that reached
-        none: it may only pass by (``tests/solve/test_basins_apart.py``, on one worker)."""
+        none: it may only pass by (``tests/solve/test_basins_apart.py``: the second basin,
+        polished knowing the first's optimum)."""
         return len(self.optima) > 1 or any(
             not r.feasible or r.ipopt_status not in SUCCESS + (JOINED,)
             for r in self.result.starts)
@@ -425,11 +426,18 @@ class _Polishing:
         (or `starts` polishes). Where the polishes end :meth:`apart`, on through the next
         basins until `basins` polishes in a row bring no better optimum (the screening's rank
         of a basin is the sampled value of its seed, not of its bottom, so the best basin may
-        rank third or fourth)."""
+        rank third or fourth).
+
+        The best `basins` are polished as if at once, each knowing no optimum found by the
+        others: the first here, each other on a solver of its own (:func:`_polish_alone`), in
+        a process forked from this one where the solve has the cores, one after another here
+        where it has one (a front's ends, an atlas's cells). The same polishes either way,
+        and so the same answer on one worker as on several; the later basins are polished
+        here, each stopped once it joins an optimum found already."""
         s = self.problem.solver
         seeds = list(seeds)
-        together = min(s.basins, s.starts, len(seeds), self.workers)
-        if together > 1:        # the best basins at once: the first here, each other in a fork
+        head = min(s.basins, s.starts, len(seeds))
+        if head > 1:
             # built here first: the forked processes inherit it (built.py), and the
             # polishes after theirs run on it in this one; so do the exact evaluator's
             # functions, which the first start's check builds
@@ -437,17 +445,24 @@ class _Polishing:
             with self.solver.timings.stage("build"):
                 nlp.solver(s.hessian)
             first = self.solver.verify(self.problem, seeds[0].values, search=False)
+            others = [c.values for c in seeds[1:head]]
             before = replace(self.solver.timings)
-            runs = _in_parallel(self.problem, self.count, [c.values for c in seeds[1:together]],
-                                lambda: self.polish(seeds[0].values, first))
+            if self.workers > 1:
+                runs = _in_parallel(self.problem, self.count, others, self.workers - 1,
+                                    lambda: self.polish(seeds[0].values, first))
+            else:
+                self.polish(seeds[0].values, first)
+                runs = [_polish_alone((self.problem, self.count, v,
+                                       self.solver.checks_in_parallel)) for v in others]
             for outcome, _ in runs:
                 self.record(outcome)
             mine = self.solver.timings
-            for stage in ("build", "ipopt", "verification"):   # the processes ran at once
+            for stage in ("build", "ipopt", "verification"):
                 here = getattr(mine, stage) - getattr(before, stage)
-                setattr(mine, stage, getattr(before, stage) +
-                        max([here] + [getattr(t, stage) for _, t in runs]))
-            seeds = seeds[together:]
+                theirs = [getattr(t, stage) for _, t in runs]
+                setattr(mine, stage, getattr(before, stage) + (     # at once, or in turn
+                    max([here] + theirs) if self.workers > 1 else here + sum(theirs)))
+            seeds = seeds[head:]
         for seed in seeds:
             if self.polished >= s.starts:
                 return
@@ -497,16 +512,17 @@ def _as_found(outcome: Outcome) -> Outcome:
     return Outcome(record, outcome.verification, dict(outcome.values), None)
 
 
-def _in_parallel(problem, count: int, starts: list[dict],
+def _in_parallel(problem, count: int, starts: list[dict], processes: int,
                  here) -> list[tuple[Outcome, Timings]]:
-    """Polish each start in a process of its own (forked: nothing to import again, and the
-    NLP this process built is inherited; each ends if this process dies) while this process
-    runs ``here()`` (its own polish); the forks' outcomes and stage times."""
+    """Polish each start (:func:`_polish_alone`) in at most ``processes`` processes (forked:
+    nothing to import again, and the NLP this process built is inherited; each ends if this
+    process dies) while this process runs ``here()`` (its own polish); the forks' outcomes
+    and stage times, in the order of ``starts``."""
     import multiprocessing as mp
     import os
     from concurrent.futures import ProcessPoolExecutor
 
-    pool = ProcessPoolExecutor(len(starts), mp_context=mp.get_context("fork"),
+    pool = ProcessPoolExecutor(min(processes, len(starts)), mp_context=mp.get_context("fork"),
                                initializer=die_with_parent, initargs=(os.getpid(),))
     try:
         with signals_held():             # the workers are forked as the jobs are handed out
@@ -523,9 +539,11 @@ def _in_parallel(problem, count: int, starts: list[dict],
 
 
 def _polish_alone(job) -> tuple[Outcome, Timings]:
-    """A further basin's polish (``secondary``: with a budget) in a forked process."""
-    problem, count, values = job
+    """A further best basin's polish (``secondary``: with a budget), on a solver of its own
+    that knows no optimum: in a forked process, or in turn in this one."""
+    problem, count, values, *parallel_checks = job
     solver = PhaseSolver(problem, count)
+    solver.checks_in_parallel = bool(parallel_checks and parallel_checks[0])
     return solver.solve_from(dict(values), secondary=True), solver.timings
 
 

@@ -15,7 +15,7 @@ Per problem of the race (``benchmarks/solve_vs_peers.py``'s ``CASES``):
   pays once per process, measured on their own just before it;
 * **our warm solve**: the next ``--repeats`` calls in that process (medians), each stage of
   it (``timings_s``: the NLP's build, the screening, the IPOPT runs, the exact verification;
-  the rest is the pool, the sensitivities, the accuracy record, the bookkeeping) and the IPOPT
+  the rest is the sensitivities, the accuracy record, the bookkeeping) and the IPOPT
   iterations of the winning run against all of the solve's;
 * **before and after**: the same in processes on CasADi's virtual machine
   (``OPTDESIGN_COMPILE=off``), a virtual-machine process and a compiled one alternating for

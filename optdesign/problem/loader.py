@@ -162,7 +162,7 @@ class SolverSettings:
     agree: int = 2                      # infeasible after agree + 1 local-infeasibility verdicts
     screen: int = 512                   # designs screened before IPOPT (Sobol sample)
     basins: int = 2                     # best basins of the screening polished (then lines)
-    workers: int = 0                    # processes polishing basins at once (0: every core)
+    workers: int = 0                    # cores a solve uses (0: every core)
     smoothing: float = 200.0            # log-sum-exp ρ, per unit of ω/ω1
     seed: int = 0
     max_iter: int = 100                 # IPOPT iterations per start
@@ -272,7 +272,8 @@ SOLVER_KEYS: tuple[Key, ...] = (
         default=SolverSettings.screen, lower=1, upper=COUNTS["screen"]),
     Key("basins", "integer", "best basins of the screening polished by IPOPT",
         default=SolverSettings.basins, lower=1, upper=COUNTS["basins"]),
-    Key("workers", "integer", "processes polishing basins at once (0: every core)",
+    Key("workers", "integer", "cores a solve uses: the screening's threads and the tolerance "
+        "analysis's processes (0: every core)",
         default=SolverSettings.workers, lower=0, upper=COUNTS["workers"]),
     Key("starts", "integer", "most IPOPT polishes per phase count",
         default=SolverSettings.starts, lower=1, upper=COUNTS["starts"]),

@@ -10,8 +10,8 @@ variables and bound them, the options shape the graph), the constraint rows its 
 criteria give (code, not the file: a criterion added to a mechanism in this process builds
 another NLP), the phase count, IPOPT's options and where its derivatives came from
 (``OPTDESIGN_COMPILE`` and the cache folder, :mod:`optdesign.solver.compiled`), and the
-thread that solves (two threads never share an NLP). Polishes forked from this process
-(:func:`optdesign.solver.driver._in_parallel`) inherit what is kept.
+thread that solves (two threads never share an NLP). A process forked from this one
+inherits what is kept.
 
 A kept NLP carries no state from one solve to the next: each IPOPT run starts from the
 values, bounds and parameters it is given, and its iteration watch is armed afresh
@@ -51,11 +51,11 @@ def key_of(problem, count: int) -> bytes:
     # mechanism in this process builds another NLP)
     rows = [(type(c).__qualname__, c.name) for c in constraints_of(problem)]
     # Pickle writes an object met twice once (by reference) and interns the attribute names
-    # it reads back, so equal problems may pickle to different bytes: a copy a forked polish
+    # it reads back, so equal problems may pickle to different bytes: a copy a worker
     # received shares other strings than the problem it was made from. Each part is pickled
     # on its own, and the problem as its copy is (read back once): the same bytes for both.
     # The thread is a part: an NLP's IPOPT function and its iteration watch serve one run at
-    # a time (a polish forked from a thread runs on a copy of it, and inherits its NLPs).
+    # a time (a process forked from a thread runs on a copy of it, and inherits its NLPs).
     parts = (compiled.mode(), cache, sorted(IPOPT_OPTIONS.items()), rows,
              pickle.loads(pickle.dumps(problem)), int(count), threading.get_ident())
     return b"".join(hashlib.sha256(pickle.dumps(part)).digest() for part in parts)

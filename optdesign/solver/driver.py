@@ -22,7 +22,7 @@ from optdesign.envelope.sampled import STROKE_SIGNS
 from optdesign.errors import AssemblyError, ProblemError
 from optdesign.evaluation.regulation import quantities_over_range
 from optdesign.evaluation.sensitivity import sensitivity_record
-from optdesign.lifetime import die_with_parent, interrupts_kept, signals_held
+from optdesign.lifetime import interrupts_kept
 from optdesign.numerics import lanes
 from optdesign.quantities import design_quantities, get_quantity
 from optdesign.quantities.criteria import (LengthConstraint, bound_excess, constraints_of,
@@ -428,40 +428,25 @@ class _Polishing:
         of a basin is the sampled value of its seed, not of its bottom, so the best basin may
         rank third or fourth).
 
-        The best `basins` are polished as if at once, each knowing no optimum found by the
-        others: the first here, each other on a solver of its own (:func:`_polish_alone`), in
-        a process forked from this one where the solve has the cores, one after another here
-        where it has one (a front's ends, an atlas's cells). The same polishes either way,
-        and so the same answer on one worker as on several; the later basins are polished
-        here, each stopped once it joins an optimum found already."""
+        The best `basins` are polished as if at once, each after the first on a solver of its
+        own that knows no optimum the others found (:func:`_polish_beside`): so a basin that
+        would join the first's optimum only in passing runs to its end, and the answer does
+        not depend on the worker count. They are polished in turn, not in forked processes:
+        a forked process pays for every page it writes, and two polishes at once share the
+        cores' cache, so on 2 cores the race's problems solve as fast in turn
+        (``benchmarks/solve_time_ab.py``), with one process and the other core left to the
+        figures' process. The later basins are polished here, each stopped once it joins an
+        optimum found already."""
         s = self.problem.solver
         seeds = list(seeds)
         head = min(s.basins, s.starts, len(seeds))
         if head > 1:
-            # built here first: the forked processes inherit it (built.py), and the
-            # polishes after theirs run on it in this one; so do the exact evaluator's
-            # functions, which the first start's check builds
-            nlp = self.solver.nlp([()])
-            with self.solver.timings.stage("build"):
-                nlp.solver(s.hessian)
-            first = self.solver.verify(self.problem, seeds[0].values, search=False)
-            others = [c.values for c in seeds[1:head]]
-            before = replace(self.solver.timings)
-            if self.workers > 1:
-                runs = _in_parallel(self.problem, self.count, others, self.workers - 1,
-                                    lambda: self.polish(seeds[0].values, first))
-            else:
-                self.polish(seeds[0].values, first)
-                runs = [_polish_alone((self.problem, self.count, v,
-                                       self.solver.checks_in_parallel)) for v in others]
-            for outcome, _ in runs:
+            self.polish(seeds[0].values)
+            for seed in seeds[1:head]:
+                outcome, timings = _polish_beside(self.problem, self.count, seed.values,
+                                                  self.solver.checks_in_parallel)
                 self.record(outcome)
-            mine = self.solver.timings
-            for stage in ("build", "ipopt", "verification"):
-                here = getattr(mine, stage) - getattr(before, stage)
-                theirs = [getattr(t, stage) for _, t in runs]
-                setattr(mine, stage, getattr(before, stage) + (     # at once, or in turn
-                    max([here] + theirs) if self.workers > 1 else here + sum(theirs)))
+                self.solver.timings.add(timings)
             seeds = seeds[head:]
         for seed in seeds:
             if self.polished >= s.starts:
@@ -512,44 +497,19 @@ def _as_found(outcome: Outcome) -> Outcome:
     return Outcome(record, outcome.verification, dict(outcome.values), None)
 
 
-def _in_parallel(problem, count: int, starts: list[dict], processes: int,
-                 here) -> list[tuple[Outcome, Timings]]:
-    """Polish each start (:func:`_polish_alone`) in at most ``processes`` processes (forked:
-    nothing to import again, and the NLP this process built is inherited; each ends if this
-    process dies) while this process runs ``here()`` (its own polish); the forks' outcomes
-    and stage times, in the order of ``starts``."""
-    import multiprocessing as mp
-    import os
-    from concurrent.futures import ProcessPoolExecutor
-
-    pool = ProcessPoolExecutor(min(processes, len(starts)), mp_context=mp.get_context("fork"),
-                               initializer=die_with_parent, initargs=(os.getpid(),))
-    try:
-        with signals_held():             # the workers are forked as the jobs are handed out
-            pending = pool.map(_polish_alone, [(problem, count, v) for v in starts])
-        here()
-        outcomes = list(pending)
-    except BaseException:       # Ctrl-C (the workers ignore it) or an error: end them now,
-        for proc in list((getattr(pool, "_processes", None) or {}).values()):
-            proc.terminate()    # and wait for nothing: one ended as it sent its outcome
-        pool.shutdown(wait=False, cancel_futures=True)  # leaves the pool's reader waiting
-        raise
-    pool.shutdown(wait=True)
-    return outcomes
-
-
-def _polish_alone(job) -> tuple[Outcome, Timings]:
-    """A further best basin's polish (``secondary``: with a budget), on a solver of its own
-    that knows no optimum: in a forked process, or in turn in this one."""
-    problem, count, values, *parallel_checks = job
+def _polish_beside(problem, count: int, values: dict,
+                   checks_in_parallel: bool = False) -> tuple[Outcome, Timings]:
+    """A further best basin's polish (``secondary``: with a budget) on a solver of its own,
+    which knows no optimum found before (its NLPs the process's kept ones of exactly the
+    slots it asks for, :mod:`optdesign.solver.built`); its outcome and stage times."""
     solver = PhaseSolver(problem, count)
-    solver.checks_in_parallel = bool(parallel_checks and parallel_checks[0])
+    solver.checks_in_parallel = checks_in_parallel
     return solver.solve_from(dict(values), secondary=True), solver.timings
 
 
 def workers_for(problem) -> int:
-    """Processes for the polishes: ``solver.workers``, or (0) every core, where the platform
-    can fork."""
+    """The cores a solve uses (the screening's threads, the tolerance analysis's processes):
+    ``solver.workers``, or (0) every core, where the platform can fork."""
     import multiprocessing as mp
 
     from optdesign.limits import local_processes
@@ -562,9 +522,9 @@ def workers_for(problem) -> int:
 def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
                 workers: int | None = None, neighbours: list[dict] = (),
                 explain: bool = True, sensitivities: bool = False) -> PhaseResult:
-    """Best verified optimum of one phase count: screen, then polish the best basins (in
-    ``workers`` processes at once; default :func:`workers_for`; 1 with a given ``solver``,
-    whose built NLPs are kept for re-use). ``neighbours``: optima of other phase counts,
+    """Best verified optimum of one phase count: screen (on ``workers`` threads; default
+    :func:`workers_for`; 1 with a given ``solver``, whose built NLPs are kept for re-use),
+    then polish the best basins (:meth:`_Polishing.basins`). ``neighbours``: optima of other phase counts,
     screened with the box (continuation: the optimum of n - 1 often lies in the best basin
     of n, and ranks first when it does). ``sensitivities``: the optimum's block computed
     here, on the evaluation its polish verified (a solve of one count; otherwise
@@ -955,7 +915,7 @@ def _fill(result: PhaseResult, problem, outcome: Outcome,
         result.worst_case_min_transmission_angle_deg = angle.value
         result.worst_case_quantities = {case.quantity: case.value for case in bounded}
     result.active = outcome.record.active
-    if sensitivities:           # on the evaluation at hand (it may come from a forked polish)
+    if sensitivities:           # on the evaluation at hand
         result.sensitivities = sensitivity_record(problem, design, ver.evaluation)
     result.quantities = design_quantities(problem, _every_quantity_searched(problem,
                                                                             ver.evaluation))

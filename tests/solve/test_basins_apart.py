@@ -42,11 +42,11 @@ def test_without_the_rule_the_solve_stops_in_the_worse_basin(six_phases, monkeyp
 
 
 def test_on_one_worker_the_best_basins_are_polished_as_on_two(six_phases):
-    """One worker (an atlas's cells, a front's ends) polishes the best basins one after
-    another, each as if beside the others (knowing no optimum they found): the same polishes
-    as two workers, and the same answer. (One worker used to polish the second basin knowing
-    the first's optimum: it stopped as it passed near it, a stop that counts as reaching
-    none, and two more basins followed; beside the first it exhausts its budget.)"""
+    """The best basins are polished as if at once, each knowing no optimum the others found:
+    the same polishes on one worker (an atlas's cells, a front's ends) as on two, and the
+    same answer. (One worker used to polish the second basin knowing the first's optimum:
+    it stopped as it passed near it, a stop that counts as reaching none, and two more
+    basins followed; polished beside the first, it exhausts its budget.)"""
     polishes = {}
     for workers in (1, 2):
         problem = replace(six_phases, solver=replace(six_phases.solver, workers=workers))

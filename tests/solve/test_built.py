@@ -51,12 +51,12 @@ def test_a_second_solve_builds_nothing_and_answers_the_same(fresh, monkeypatch, 
     assert builds() == [6, 3, 5]
 
 
-def test_a_copy_sent_to_a_forked_polish_has_the_same_key():
-    """Pickled together with its count (as a polish's job is), the copy's key is the key of
-    the problem: the forked process finds the NLP it inherited."""
+def test_a_copy_sent_to_a_worker_has_the_same_key():
+    """Pickled together with its count (as a front's point is sent to its worker), the copy's
+    key is the key of the problem: the worker's next point finds the NLP its last one built."""
     for problem in (problem_from_dict(file_data(VERGOV)),
                     load_problem(ROOT / "problems" / "free_design.yaml")):
-        job = (problem, 3, problem.start_values())       # driver._in_parallel's
+        job = (problem, 3, problem.start_values())
         copy, count, *_ = pickle.loads(pickle.dumps(job))
         assert built.key_of(copy, count) == built.key_of(problem, 3)
         again = pickle.loads(pickle.dumps(copy))
@@ -118,18 +118,20 @@ def test_two_threads_never_share_an_nlp(fresh):
     assert theirs[0] is not mine and built.kept(problem, 3) is mine
 
 
-def test_the_best_basin_is_polished_here_the_next_in_a_fork(fresh, monkeypatch, tmp_path):
-    """Two basins at once: the best-ranked in the solving process (its start checked here
-    first, so the fork inherits the evaluator's functions too), the other in one forked
-    process; the same answer as the NLPs kept from a solve before."""
+def test_the_two_best_basins_are_polished_in_turn_the_second_knowing_no_optimum(
+        fresh, monkeypatch, tmp_path):
+    """Two basins as if at once: both in the solving process, one after the other (no fork),
+    the second as a secondary polish on a solver of its own that knows no optimum the first
+    found (so it does not stop as it passes near it); the same answer as the NLPs kept from
+    a solve before."""
     import os
 
     log = tmp_path / "polishes"
     solve_from = driver.PhaseSolver.solve_from
 
     def logged(self, values, *args, **kwargs):
-        with open(log, "a") as f:           # from the forked polish as well
-            f.write(f"{os.getpid()} {kwargs.get('secondary', False)}\n")
+        with open(log, "a") as f:
+            f.write(f"{os.getpid()} {kwargs.get('secondary', False)} {len(self.avoid)}\n")
         return solve_from(self, values, *args, **kwargs)
 
     monkeypatch.setattr(driver.PhaseSolver, "solve_from", logged)
@@ -137,9 +139,7 @@ def test_the_best_basin_is_polished_here_the_next_in_a_fork(fresh, monkeypatch, 
     data.setdefault("solver", {})["workers"] = 2
     disc = problem_from_dict(data)
     result = solve(disc)
-    polishes = sorted(line.split() for line in log.read_text().splitlines())  # any order
-    assert result.per_phase[0].screening["polished"] == 2 and len(polishes) == 2
-    here = [secondary for pid, secondary in polishes if pid == str(os.getpid())]
-    forked = [secondary for pid, secondary in polishes if pid != str(os.getpid())]
-    assert here == ["False"] and forked == ["True"]
+    polishes = [line.split() for line in log.read_text().splitlines()]
+    assert result.per_phase[0].screening["polished"] == 2
+    assert polishes == [[str(os.getpid()), "False", "0"], [str(os.getpid()), "True", "0"]]
     assert answer(solve(disc)) == answer(result)

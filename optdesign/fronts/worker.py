@@ -27,12 +27,6 @@ LOOSE_MAX_RIPPLE = 10.0
 #: the largest-ratio design is re-solved for least ripple at this fraction below its ratio
 END_RATIO_BACKOFF = 1e-7
 
-def _solver(problem, count: int) -> PhaseSolver:
-    """A task's own solver: its NLPs the process's kept ones of exactly the slots it asks for
-    (:mod:`optdesign.solver.built`), whatever the worker solved before."""
-    return PhaseSolver(problem, count)
-
-
 def criteria_columns(problem, values: dict) -> dict:
     """The report columns the problem's criteria give a design (e.g. the four-bar's pin
     radius, as its mechanism computes it under the file's pin layout)."""
@@ -105,7 +99,7 @@ def solve_end(problem, count: int, kind: str) -> dict:
     point = _Point(problem, count, kind, kind)
     axis = axis_of(problem)
     if kind == "least_ripple":
-        res = solve_phase(problem, count, solver=_solver(problem, count))
+        res = solve_phase(problem, count, solver=PhaseSolver(problem, count))
         point.iterations, point.tries = res.iterations, len(res.starts)
         if res.status != "optimal":
             return point.record(res.status, note=res.message)
@@ -114,14 +108,14 @@ def solve_end(problem, count: int, kind: str) -> dict:
                             "Solve_Succeeded", active=res.active)
     q = replace(problem, objective=replace(problem.objective, minimize=axis.objective)
                 ).with_limit("ripple", "upper", LOOSE_MAX_RIPPLE)
-    res = solve_phase(q, count, solver=_solver(q, count))
+    res = solve_phase(q, count, solver=PhaseSolver(q, count))
     point.iterations, point.tries = res.iterations, len(res.starts)
     if res.status != "optimal":
         return point.record(res.status, note=res.message)
     limits = [a for a in res.active if a["name"] not in ("max_ripple", axis.name)]
     gain = axis.gain_of({"ratio": res.ratio, "quantities": res.quantities})
     epsilon = gain * (1 - END_RATIO_BACKOFF) if gain >= 0 else gain * (1 + END_RATIO_BACKOFF)
-    outcome = _solver(problem, count).solve_from(dict(res.design), **_bound(axis, epsilon))
+    outcome = PhaseSolver(problem, count).solve_from(dict(res.design), **_bound(axis, epsilon))
     rec, ver = outcome.record, outcome.verification
     point.iterations += rec.iterations
     if rec.feasible and ver.delta <= res.delta:
@@ -160,7 +154,7 @@ def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
     then from the multi-start designs. ``tags`` are added to the record (its round, the point
     a re-solve replaces)."""
     point = _Point(problem, count, index, "sweep", epsilon)
-    solver = _solver(problem, count)
+    solver = PhaseSolver(problem, count)
     found: list[Candidate] = []
     last, note = None, "no start design assembles"
 

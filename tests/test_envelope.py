@@ -7,7 +7,7 @@ import pytest
 
 from optdesign import mechanisms
 from optdesign.evaluation.design import Design
-from optdesign.envelope.sampled import output_envelope, sampled_figures
+from optdesign.envelope.sampled import driving_speeds, output_envelope, sampled_figures
 from optdesign.envelope.exact import exact_figures
 from optdesign.mechanisms.base import Mechanism, VariableSpec
 
@@ -97,3 +97,12 @@ def test_a_design_evaluated_again_reuses_its_figures_and_another_does_not(sine):
     for k in range(evaluation._EVALUATED_SIZE + 5):
         evaluation.evaluate(sine(4, a=1.0 + k * 1e-3), "forward", 1.0, (1.0,))
     assert len(evaluation._EVALUATED) <= evaluation._EVALUATED_SIZE
+
+
+def test_driving_speeds_are_the_rocker_speeds_signed_per_stroke():
+    """Forward: the rows as they are (read in place, the screening's arrays are large);
+    reverse: negated; both: forward rows, then reverse rows."""
+    dtheta = np.array([[0.5, -0.25, 0.0], [1.0, 2.0, -3.0]])
+    assert np.array_equal(driving_speeds(dtheta, "forward"), dtheta)
+    assert np.array_equal(driving_speeds(dtheta, "reverse"), -dtheta)
+    assert np.array_equal(driving_speeds(dtheta, "both"), np.vstack([dtheta, -dtheta]))

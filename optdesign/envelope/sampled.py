@@ -77,8 +77,16 @@ class StrokeFigures:
 
 
 def driving_speeds(dtheta: np.ndarray, stroke: str) -> np.ndarray:
-    """Rows s·dθ_k/dφ for every chain k and sign s of the stroke (speed per unit ω1)."""
-    return np.vstack([s * dtheta for s in STROKE_SIGNS[stroke]])
+    """Rows s·dθ_k/dφ for every chain k and sign s of the stroke (speed per unit ω1).
+
+    The forward stroke's rows are ``dtheta`` itself, not a copy (1·x is x to the bit): the
+    screening's arrays hold 24 chains × a hundred thousand crank samples, and a copy of them,
+    written to fresh memory, costs more than the arithmetic. Read the result, never write it.
+    """
+    signs = STROKE_SIGNS[stroke]
+    if signs == (1,):
+        return np.asarray(dtheta)
+    return np.vstack([s * dtheta for s in signs])
 
 
 def output_envelope(dtheta: np.ndarray, stroke: str) -> np.ndarray:

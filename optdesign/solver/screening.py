@@ -260,16 +260,23 @@ def sampled_scores(problem, count, base, free, X, sampled: dict | None = None,
                            for k in model.lengths])
             dth, cos_mu = fmap(phi, np.repeat(P, N, axis=1))      # fresh arrays: no copy
             n = dth.shape[0]
-            f = driving_speeds(dth, problem.stroke).reshape(-1, S, N) / e
-            env = np.maximum(f.max(axis=0), 0.0)
+            # read in place: a copy of these arrays, in fresh memory, costs more than the
+            # arithmetic on them (x / 1 is x to the bit)
+            f = driving_speeds(dth, problem.stroke).reshape(-1, S, N)
+            if e != 1.0:
+                f = f / e
+            driving = f.argmax(axis=0)
+            top = _pick(f, driving)         # the envelope before the output at rest
+            env = np.maximum(top, 0.0)
             hi, mean = env.max(axis=1), env.mean(axis=1)
-            lo = np.minimum(env.min(axis=1), _crossings(f).min(axis=1))
+            lo = np.minimum(env.min(axis=1), _crossings(f, driving, top).min(axis=1))
             delta = ripple_of(hi, lo, mean, problem.objective.ripple)
             if e in problem.eccentricities:
                 ripples.append(delta)
             if e == 1.0:
                 ratio, peak = mean, hi
-            worst_cos = np.abs(cos_mu).reshape(n, S, N).max(axis=(0, 2))
+            cos_mu = cos_mu.reshape(n, S, N)         # max |cos μ| without a copy of |cos μ|
+            worst_cos = np.maximum(cos_mu.max(axis=(0, 2)), -cos_mu.min(axis=(0, 2)))
             envelope[e] = {"ratio": mean * e, "ripple": delta,
                            "peak_speed": hi * e * problem.input_speed,
                            "transmission_angle":
@@ -306,18 +313,27 @@ def sampled_scores(problem, count, base, free, X, sampled: dict | None = None,
     return score, violation
 
 
-def _crossings(f: np.ndarray) -> np.ndarray:
+def _pick(f: np.ndarray, curve: np.ndarray) -> np.ndarray:
+    """``f[curve[s, i], s, i]``: each sample's value of the curve ``curve`` names."""
+    return np.take_along_axis(f, curve[None], axis=0)[0]
+
+
+def _crossings(f: np.ndarray, driving: np.ndarray | None = None,
+               top: np.ndarray | None = None) -> np.ndarray:
     """Envelope value where the driving curve changes between two samples, each curve taken
     linear in between: the kink (the trough) that the samples step over, to O(h²).
 
-    ``f``: curves × designs × samples. Returns designs × samples (inf where no hand-over).
+    ``f``: curves × designs × samples; ``driving``, ``top``: its argmax and max over the
+    curves, where the caller has them. Returns designs × samples (inf where no hand-over).
+    The next sample's values are picked from ``f`` where they lie, not from a rolled copy
+    of ``f`` (the same values, without writing curves × designs × samples anew).
     """
-    nxt = np.roll(f, -1, axis=2)
-    a = f.argmax(axis=0)
-    b = np.roll(a, -1, axis=1)          # the next sample's driving curve: nxt's argmax
-    pick = lambda g, c: np.take_along_axis(g, c[None], axis=0)[0]   # noqa: E731
-    fa0, fa1, fb0 = pick(f, a), pick(nxt, a), pick(f, b)
-    fb1 = np.roll(fa0, -1, axis=1)      # the next sample's envelope: pick(nxt, b)
+    a = f.argmax(axis=0) if driving is None else driving
+    b = np.roll(a, -1, axis=1)          # the next sample's driving curve
+    fa0 = _pick(f, a) if top is None else top
+    fa1 = np.roll(_pick(f, np.roll(a, 1, axis=1)), -1, axis=1)   # curve a[i] at sample i + 1
+    fb0 = _pick(f, b)
+    fb1 = np.roll(fa0, -1, axis=1)      # the next sample's envelope: curve b[i] at i + 1
     gap0, gap1 = fa0 - fb0, fa1 - fb1
     t = np.clip(gap0 / np.where(gap0 != gap1, gap0 - gap1, 1.0), 0.0, 1.0)
     value = np.maximum(fa0 + t * (fa1 - fa0), 0.0)

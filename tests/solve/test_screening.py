@@ -62,7 +62,9 @@ def test_crossings_take_the_next_sample_from_the_rolled_argmax_to_the_bit():
         t = np.clip(gap0 / np.where(gap0 != gap1, gap0 - gap1, 1.0), 0.0, 1.0)
         before = np.where(a != b, np.maximum(fa0 + t * (fa1 - fa0), 0.0), np.inf)
         now = _crossings(f)
+        given = _crossings(f, a, fa0)        # the caller's argmax and envelope, as the screening
     assert np.array_equal(now, before, equal_nan=True)
+    assert np.array_equal(given, before, equal_nan=True)
     assert np.isfinite(now).any() and np.isinf(now).any()
 
 

@@ -196,7 +196,8 @@ class PhaseSolver:
             at_rest = run.at_rest
             iterations += run.iterations
             trial = values | run.lengths
-            new = self.verify(problem, trial, held)
+            # Where the run ends decides what follows; the exact check of where it stopped is
+            # made only where something reads it (a stopped or retried run keeps its start's)
             if status == "Maximum_Iterations_Exceeded" and hessian == "limited-memory" \
                     and not secondary:
                 # The quasi-Newton run stalled: once more from the same start with CasADi's
@@ -213,6 +214,7 @@ class PhaseSolver:
             if status == JOINED:
                 note = "joined the basin of an optimum found from another start"
                 break
+            new = self.verify(problem, trial, held)
             if status not in SUCCESS:
                 note = run.binding
                 values, ver = (trial, new) if new.sequences else (values, ver)

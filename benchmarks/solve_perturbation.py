@@ -58,20 +58,12 @@ def floor_run(problem, phase):
     """(the NLP, its IPOPT arguments from ``phase``'s winning start, its count): the run
     ``benchmarks/solve_floor.py`` times."""
     from optdesign.solver.driver import PhaseSolver
-    from optdesign.solver.verify import start_guess
     from solve_floor import winning_start
 
     count, start, _ = winning_start(problem, phase)
     solver = PhaseSolver(problem, count)
-    ver = solver.verify(problem, start, search=False)
-    nlp = solver.nlp(ver.sequences)
-    guess = start_guess(nlp, ver)
-    lbx, ubx = nlp.bounds(guess, ver.sequences, ver.held)
-    params = nlp.parameters(ver.sequences, ver.held)
-    lbg, ubg = nlp.constraint_bounds(problem, ver.sequences, 0.0, ver.held, guess)
-    x0 = nlp.start(guess, lbx, ubx, params)
-    params = nlp.with_picks(x0, params, ver.sequences)
-    return nlp, dict(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=params), count
+    nlp, args = solver.ipopt_arguments(problem, solver.verify(problem, start, search=False))
+    return nlp, args, count
 
 
 def floor_rows(rounds: int) -> list[dict]:

@@ -310,23 +310,31 @@ class PhaseSolver:
         with self.timings.stage("verification"):
             return screened_cases(problem, values)
 
-    def _ipopt(self, problem, ver: Verification, tightening: float, hessian: str,
-               budget: int | None = None) -> "_Run":
-        """One IPOPT run on the NLP from the verified design ``ver`` (stopped after ``budget``
-        iterations when one is given)."""
+    def ipopt_arguments(self, problem, ver: Verification,
+                        tightening: float = 0.0) -> tuple[PhaseNLP, dict]:
+        """The NLP for the verified design ``ver`` and IPOPT's arguments from it (``x0``,
+        ``lbx``, ``ubx``, ``lbg``, ``ubg``, ``p``): the start and bounds of one run."""
         nlp = self.nlp(ver.sequences)
         guess = start_guess(nlp, ver)
         lbx, ubx = nlp.bounds(guess, ver.sequences, ver.held)
         params = nlp.parameters(ver.sequences, ver.held)
         lbg, ubg = nlp.constraint_bounds(problem, ver.sequences, tightening, ver.held, guess)
+        x0 = nlp.start(guess, lbx, ubx, params)
+        params = nlp.with_picks(x0, params, ver.sequences)
+        return nlp, dict(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=params)
+
+    def _ipopt(self, problem, ver: Verification, tightening: float, hessian: str,
+               budget: int | None = None) -> "_Run":
+        """One IPOPT run on the NLP from the verified design ``ver`` (stopped after ``budget``
+        iterations when one is given)."""
+        nlp, args = self.ipopt_arguments(problem, ver, tightening)
+        lbx, ubx, lbg, ubg, params = (args[k] for k in ("lbx", "ubx", "lbg", "ubg", "p"))
         with self.timings.stage("build"):
             solver = nlp.solver(hessian)
         nlp.watch.start([np.array([v[k] for k in nlp.free]) / nlp.scale for v in self.avoid],
                         lbg, ubg, None if budget is None else max(budget, 1))
-        x0 = nlp.start(guess, lbx, ubx, params)
-        params = nlp.with_picks(x0, params, ver.sequences)
         with self.timings.stage("ipopt"), interrupts_kept():   # CasADi swallows Ctrl-C
-            sol = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=params)
+            sol = solver(**args)
         stats = solver.stats()
         x = np.array(sol["x"]).ravel()
         joined = nlp.watch.joined

@@ -48,20 +48,50 @@ class Curves:
         self.n = design.count
         self.m = self.n * len(self.signs) + 1
         self._chains: dict = {}          # chain k -> its bound call (Design.chain_call)
+        self._ends: dict = {}            # (start, end) -> grid() at a run's two ends
+        self._inside: dict = {}          # (start, end, id of the grid) -> _inside()
 
     def split(self, c: int) -> tuple[int, int]:
         return c % self.n, self.signs[c // self.n]
 
     def stack(self, out: dict) -> tuple[np.ndarray, np.ndarray]:
-        f = np.vstack([s * out["dtheta"].reshape(self.n, -1) for s in self.signs])
-        df = np.vstack([s * out["ddtheta"].reshape(self.n, -1) for s in self.signs])
-        zero = np.zeros((1, f.shape[1]))
-        return np.vstack([f, zero]), np.vstack([df, zero])
+        """(f, f') of every curve at the sampled angles of ``out`` (:meth:`Design.sample`):
+        s·dθ_k/dφ and s·d²θ_k/dφ² for each sign s of the stroke, then the zero curve; each
+        written once into its place (the evaluator's root searches stack thousands of
+        single angles)."""
+        n = self.n
+        dtheta = out["dtheta"].reshape(n, -1)
+        ddtheta = out["ddtheta"].reshape(n, -1)
+        f, df = np.empty((self.m, dtheta.shape[1])), np.empty((self.m, dtheta.shape[1]))
+        for j, s in enumerate(self.signs):
+            np.multiply(s, dtheta, out=f[j * n:(j + 1) * n])
+            np.multiply(s, ddtheta, out=df[j * n:(j + 1) * n])
+        f[-1], df[-1] = 0.0, 0.0
+        return f, df
 
     def grid(self, phi: np.ndarray):
         out = self.design.sample(phi, self.ecc)
         f, df = self.stack(out)
         return f, df, out["theta"]
+
+    def ends(self, run: Run):
+        """:meth:`grid` at the run's two ends (its start and end, modulo 2π): read by the
+        envelope's values, the stationary points' brackets and the run's angle increment,
+        sampled once for the three."""
+        key = (run.start, run.end)
+        out = self._ends.get(key)
+        if out is None:
+            out = self._ends[key] = self.grid(np.mod(np.array([run.start, run.end]), TWO_PI))
+        return out
+
+    def inside(self, run: Run, phi: np.ndarray) -> np.ndarray:
+        """:func:`_inside` of the run on the grid ``phi``, found once for the run's
+        stationary points and its angle increment."""
+        key = (run.start, run.end, id(phi))
+        out = self._inside.get(key)
+        if out is None or out[0] is not phi:
+            out = self._inside[key] = (phi, _inside(run, phi))
+        return out[1]
 
     def point(self, phi: float):
         out = self.design.at(phi, self.ecc)
@@ -112,7 +142,7 @@ def exact_figures(design, stroke: str, input_speed: float, eccentricity: float =
         angles = stationary_angles(curves, run, phi, df)
         runs[i] = replace(run, stationary=tuple(angles))  # kept: the sensitivities' points
         values.append(_stationary_values(curves, angles))
-        values.append(_envelope_at(curves, np.array([run.start, run.end])))
+        values.append(curves.ends(run)[0].max(axis=0))     # the envelope at its two ends
     for b in breaks:                                      # one-sided limits at jumps of f
         values.append(_envelope_at(curves, np.array([b - 1e-10, b + 1e-10])))
     for b in toggles(design, eccentricity, phi, sampled["cos_mu"]):
@@ -149,10 +179,8 @@ def _runs(curves: Curves, phi: np.ndarray, f: np.ndarray) -> list[Run]:
     active = f.argmax(axis=0)
     n = phi.size
     switches: list[tuple[float, int]] = []           # (angle, curve active after it)
-    for j in range(n):
+    for j in np.nonzero(active != np.roll(active, -1))[0]:     # the grid cells it changes in
         a, b = active[j], active[(j + 1) % n]
-        if a == b:
-            continue
         lo, hi = phi[j], phi[(j + 1) % n] + (TWO_PI if j == n - 1 else 0.0)
         switches.extend(_resolve(curves, lo, hi, a, b, depth=0))
     if not switches:
@@ -211,10 +239,10 @@ def stationary_angles(curves: Curves, run: Run, phi: np.ndarray, df: np.ndarray)
     c = run.curve
     if c == curves.m - 1:
         return []
-    idx = _inside(run, phi)
+    idx = curves.inside(run, phi)
     xs = np.concatenate([[run.start], run.start + np.mod(phi[idx] - run.start, TWO_PI),
                          [run.end]])
-    ends = curves.grid(np.mod(np.array([run.start, run.end]), TWO_PI))[1][c]
+    ends = curves.ends(run)[1][c]
     ds = np.concatenate([[ends[0]], df[c, idx], [ends[1]]])
 
     from scipy.optimize import brentq
@@ -240,8 +268,8 @@ def _increment(curves: Curves, run: Run, phi: np.ndarray, theta: np.ndarray) -> 
     if c == curves.m - 1:
         return 0.0
     k, s = curves.split(c)
-    idx = _inside(run, phi)
-    th_ends = curves.grid(np.mod(np.array([run.start, run.end]), TWO_PI))[2][k]
+    idx = curves.inside(run, phi)
+    th_ends = curves.ends(run)[2][k]
     path = np.concatenate([[th_ends[0]], theta[k, idx], [th_ends[1]]])
     steps = np.diff(path)
     steps = (steps + np.pi) % TWO_PI - np.pi

@@ -147,13 +147,14 @@ class Design:
             cos_mu = self.sample(phi, eccentricity)["cos_mu"]
         a = np.abs(cos_mu)
         out = []
-        for k in range(a.shape[0]):
-            row = a[k]
-            for j in np.nonzero((row >= np.roll(row, 1)) & (row >= np.roll(row, -1)) &
-                                (row > 1.0 - near) & np.isfinite(row))[0]:
-                x, c = self.largest_cos(k, *_cell(phi, j), eccentricity)
-                x, c = (x, c) if c > row[j] else (phi[j], row[j])
-                out.append((k, float(x % TWO_PI), float(c)))
+        # every chain's peaks at once, chain by chain and in angle order within a chain
+        peaks = (a >= np.roll(a, 1, axis=1)) & (a >= np.roll(a, -1, axis=1)) & \
+            (a > 1.0 - near) & np.isfinite(a)
+        for k, j in zip(*np.nonzero(peaks)):
+            k, j = int(k), int(j)
+            x, c = self.largest_cos(k, *_cell(phi, j), eccentricity)
+            x, c = (x, c) if c > a[k, j] else (phi[j], a[k, j])
+            out.append((k, float(x % TWO_PI), float(c)))
         return out
 
     def check_assembly(self, eccentricity: float = 1.0, n_samples: int = 2048,
@@ -208,10 +209,15 @@ class Design:
             phi = np.linspace(0.0, 2 * np.pi, n_grid, endpoint=False)
         if cos_mu is None:
             cos_mu = self.sample(phi, eccentricity)["cos_mu"]
+        # a mechanism whose cos μ does not move with the crank (a slotted lever) has its
+        # least angle at every sample: no search between them
+        moves = self.model.has_transmission_angle(self.count, self.option_key)
         worst = []
         for k in range(cos_mu.shape[0]):
             j = int(np.argmax(np.abs(cos_mu[k])))
-            _, c = self.largest_cos(k, *_cell(phi, j), eccentricity, xatol=1e-10)
+            c = abs(cos_mu[k, j])
+            if moves:
+                c = self.largest_cos(k, *_cell(phi, j), eccentricity, xatol=1e-10)[1]
             c = min(max(c, abs(cos_mu[k, j])), 1.0)
             worst.append(np.degrees(np.arccos(c)))          # min(μ, 180° - μ) = acos|cos μ|
         return np.array(worst)

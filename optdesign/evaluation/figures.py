@@ -199,6 +199,14 @@ _WORST_CACHE: dict = {}
 _WORST_CACHE_SIZE = 32
 
 
+def forget() -> None:
+    """Let go of every evaluation kept (:data:`_EVALUATED`, :data:`_WORST_CACHE`): the next
+    evaluation of any design is made anew. For a measure of what a new problem costs a warm
+    process: a solve of a problem solved before reads its designs' figures from here."""
+    _EVALUATED.clear()
+    _WORST_CACHE.clear()
+
+
 def _worst_of(problem, design: Design) -> RangeWorst:
     """:func:`~optdesign.evaluation.regulation.worst_over_range` of ``design`` over the problem's
     interval, remembered for the last few designs."""

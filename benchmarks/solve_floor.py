@@ -13,10 +13,16 @@ Per problem of the race (``benchmarks/solve_vs_peers.py``'s ``CASES``):
   the call alone) with the NLP's compiled library in the cache; the solver's imports
   (``optdesign.solver.driver``: CasADi's and scipy.optimize's above all), which a solve
   pays once per process, measured on their own just before it;
-* **our warm solve**: the next ``--repeats`` calls in that process (medians), each stage of
-  it (``timings_s``: the NLP's build, the screening, the IPOPT runs, the exact verification;
-  the rest is the sensitivities, the accuracy record, the bookkeeping) and the IPOPT
-  iterations of the winning run against all of the solve's;
+* **our warm solve**: the next ``--repeats`` calls in that process (medians), each made after
+  the evaluator's memory of the designs it checked is emptied
+  (:func:`optdesign.evaluation.figures.forget`): a warm process solving a problem whose
+  designs it has not checked yet, not one repeating its answers; each stage of it
+  (``timings_s``: the NLP's build, the screening, the IPOPT runs, the exact verification; the
+  rest is the sensitivities, the accuracy record, the bookkeeping) and the IPOPT iterations
+  of the winning run against all of the solve's;
+* **the same solve again**: one more call with that memory kept, as a notebook that solves
+  the same file twice runs it (the exact checks of the designs the solve before checked are
+  read from it);
 * **before and after**: the same in processes on CasADi's virtual machine
   (``OPTDESIGN_COMPILE=off``), a virtual-machine process and a compiled one alternating for
   each problem in each of ``--rounds`` rounds, so both meet the same machine; "same answer"
@@ -114,14 +120,20 @@ def child(case: str, repeats: int) -> dict:
     t0 = time.perf_counter()
     import optdesign.solver.driver  # noqa: F401  (what a solve imports at its first call)
     imports = time.perf_counter() - t0
+    from optdesign.evaluation.figures import forget
+
     result, first = timed_solve(problem)
-    warm = [timed_solve(problem)[1] for _ in range(repeats)]
+    warm = []
+    for _ in range(repeats):
+        forget()
+        warm.append(timed_solve(problem)[1])
+    again = timed_solve(problem)[1]             # the memory of the solve before kept
     answer = answer_phase(problem, result)
     # a solve of several counts polishes each: the floor of each count's own winning run
     each = [floor(problem, p, repeats)["floor_s"] if p is not answer else None
             for p in result.per_phase if p.status == "optimal"]
     mine = floor(problem, answer, repeats)
-    return {"first": first, "warm": warm, "floor": mine,
+    return {"first": first, "warm": warm, "again": again, "floor": mine,
             "floor_every_count_s": sum(mine["floor_s"] if f is None else f for f in each),
             "optimal_counts": len(each),
             "imports_s": imports,
@@ -168,6 +180,7 @@ def summary(runs: list[dict]) -> dict:
     warm = [w for r in runs for w in r["warm"]]
     return {"first_s": statistics.median(r["first"]["time_s"] for r in runs),
             "warm_s": statistics.median(w["time_s"] for w in warm),
+            "again_s": statistics.median(r["again"]["time_s"] for r in runs),
             "stages_s": {k: statistics.median(w["timings"][k] for w in warm) for k in STAGES},
             "floor_s": statistics.median(r["floor"]["floor_s"] for r in runs),
             "floor_every_count_s": statistics.median(
@@ -185,15 +198,15 @@ def summary(runs: list[dict]) -> dict:
 def same_answer(a: list[dict], b: list[dict]) -> bool:
     """Every solve of both lists with the same status, δ and design, bit for bit."""
     answers = {json.dumps([s["status"], s["delta"], s["design"]], sort_keys=True)
-               for r in a + b for s in [r["first"], *r["warm"]]}
+               for r in a + b for s in [r["first"], *r["warm"], r["again"]]}
     return len(answers) == 1
 
 
 def tables(results: dict) -> str:
     lines = ["| problem | floor [ms] | warm solve [s] | warm / floor | first solve [s] | "
              "first / floor | the solver's imports, once per process [s] | counts solved: "
-             "the floor of each, summed [ms] | warm / that floor |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "the floor of each, summed [ms] | warm / that floor | the same solve again [s] |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for case, r in results.items():
         c = r["compiled"]
         every = c.get("floor_every_count_s", c["floor_s"])
@@ -202,7 +215,7 @@ def tables(results: dict) -> str:
                      f"{c['warm_s'] / c['floor_s']:.1f}× | {c['first_s']:.3f} | "
                      f"{c['first_s'] / c['floor_s']:.1f}× | {c.get('imports_s', math.nan):.2f} | "
                      + (f"{counts}: {1e3 * every:.0f} | {c['warm_s'] / every:.1f}× |"
-                        if counts > 1 else "1 | – |"))
+                        if counts > 1 else "1 | – |") + f" {c['again_s']:.3f} |")
     lines += ["", "| problem | floor: IPOPT + check [ms] | build | screening | IPOPT | "
               "verification | rest | IPOPT iterations: winning run / solve |",
               "|---|---|---|---|---|---|---|---|"]
@@ -230,8 +243,9 @@ def tables(results: dict) -> str:
 def header(args: dict) -> str:
     return (f"Our solve against its floor (one IPOPT run from the winning start, the NLP "
             f"built and compiled, plus one exact check), in-process, medians of "
-            f"{args['rounds']} fresh processes per mode × {args['repeats']} warm solves; the "
-            f"virtual machine's and the compiled processes alternating.\n\n")
+            f"{args['rounds']} fresh processes per mode × {args['repeats']} warm solves, each "
+            f"after the evaluator's memory of checked designs is emptied (the same solve again "
+            f"keeps it); the virtual machine's and the compiled processes alternating.\n\n")
 
 
 def main(argv=None) -> int:

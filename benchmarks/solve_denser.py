@@ -1,0 +1,143 @@
+"""Does `optimal` survive a denser screening of the same box? The oracle's random problems,
+each solved as shipped and with ``--factor`` times the screened designs.
+
+A solve screens ``solver.screen`` designs of the box (8 times as many where a range spans two
+decades or more), clusters them into basins and polishes the best few with IPOPT; its
+``optimal`` is the best basin it polished. The verdicts' oracle (``benchmarks/
+solve_oracle.py``) sets each verdict beside a brute-force sample of the box, judged exactly,
+which an unpolished sample seldom beats. This asks a harder question of the same problems
+(the same draws: ``--problems``, ``--seed``): the solve again with ``solver.screen`` times
+``--factor``, the two answers compared on the problem's own objective (the exact key of
+each: lower is better), in two processes at once (one per core). An answer of the denser
+solve that is better is a design the shipped solve's ``optimal`` did not know of.
+
+    python benchmarks/solve_denser.py [--problems 300] [--seed 0] [--factor 4]
+        [--mechanisms fourbar_converter slotted_lever pulse_reducer] [--resume]
+
+Writes benchmarks/results/solve_denser.md and .json (each mode's rows also in
+``solve_denser_<mode>.json`` as they come: ``--resume`` goes on from them).
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import os
+import platform
+import subprocess
+import sys
+import time
+import warnings
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from optdesign.outputs.atomic import atomic_write_text  # noqa: E402
+from solve_perturbation import MOVED, compare  # noqa: E402  (the same comparison)
+
+RESULTS = ROOT / "benchmarks" / "results"
+MODES = ("shipped", "denser")
+MECHANISMS = ("fourbar_converter", "slotted_lever", "pulse_reducer")
+
+
+def mode_rows(mode: str, args, path: Path) -> None:
+    """Solve the draws of ``args`` in ``mode``, a row per problem appended to ``path`` as it
+    comes (those there already are kept)."""
+    import numpy as np
+
+    import oracle
+    from optdesign.solver import solve, verify
+
+    rng = np.random.default_rng(args.seed)
+    draws = [d for d in (oracle.random_draw(rng, i) for i in range(args.problems))
+             if d.mechanism in args.mechanisms]
+    rows = json.loads(path.read_text()) if path.exists() else []
+    for draw in draws[len(rows):]:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            problem = oracle.build(draw)
+            if mode == "denser":
+                problem = dataclasses.replace(problem, solver=dataclasses.replace(
+                    problem.solver, screen=args.factor * problem.solver.screen))
+            t0 = time.perf_counter()
+            result = solve(problem)
+            seconds = time.perf_counter() - t0
+            key = float(verify(problem, result.design).key) if result.design else None
+        rows.append({"seed": draw.seed, "mechanism": draw.mechanism,
+                     "objective": problem.objective.minimize, "decades": draw.decades,
+                     "status": result.status, "key": key, "iterations": result.iterations,
+                     "solve_s": seconds})
+        atomic_write_text(path, json.dumps(rows, indent=1))
+        print(f"{mode} {len(rows):4d} {result.status}", flush=True)
+
+
+def table(summary: list[dict], moved: list[dict], rows: dict, factor: int) -> str:
+    time_of = {m: sum(r["solve_s"] for r in rows[m]) for m in MODES}
+    lines = [f"The solve's answer on the problems of the verdicts' oracle, as shipped and with "
+             f"{factor} times the screened designs: an answer moved when its objective moved "
+             f"by more than {MOVED:g} (relative); better or worse for the denser screening. "
+             f"Time of all solves: {time_of['shipped']:.0f} s shipped, "
+             f"{time_of['denser']:.0f} s denser.", "",
+             "| mechanism | problems | answers moved | better | worse | status changed |",
+             "|---|---|---|---|---|---|"]
+    for s in summary:
+        lines.append(f"| {s['mechanism']} | {s['problems']} | {s['moved']} | {s['better']} | "
+                     f"{s['worse']} | {s['status_changed']} |")
+    lines += ["", "| problem | mechanism | objective | box [decades] | shipped | denser | "
+              "change |", "|---|---|---|---|---|---|---|"]
+    for r in moved[:20]:
+        change = "status: " + r["status"] + " → " + r["perturbed_status"] \
+            if math.isnan(r["change"]) else f"{r['change']:+.1%}"
+        shipped = "–" if r["shipped"] is None else f"{r['shipped']:.6g}"
+        denser = "–" if r["perturbed"] is None else f"{r['perturbed']:.6g}"
+        lines.append(f"| {r['seed']} | {r['mechanism']} | {r['objective']} | "
+                     f"{r['decades']:.1f} | {shipped} | {denser} | {change} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--problems", type=int, default=300)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--factor", type=int, default=4)
+    ap.add_argument("--mechanisms", nargs="+", choices=MECHANISMS, default=list(MECHANISMS))
+    ap.add_argument("--resume", action="store_true")
+    ap.add_argument("--_mode", choices=MODES, help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+    if not 1 <= args.problems <= 10_000 or not 2 <= args.factor <= 64:
+        ap.error("--problems must be 1 to 10000 and --factor 2 to 64")
+    paths = {m: RESULTS / f"solve_denser_{m}.json" for m in MODES}
+    if args._mode:
+        mode_rows(args._mode, args, paths[args._mode])
+        return 0
+    if not args.resume:
+        for path in paths.values():
+            path.unlink(missing_ok=True)
+    env = dict(os.environ, OPTDESIGN_SERVER="off",
+               OPTDESIGN_COMPILE=os.environ.get("OPTDESIGN_COMPILE", "load"))
+    common = ["--problems", str(args.problems), "--seed", str(args.seed), "--factor",
+              str(args.factor), "--mechanisms", *args.mechanisms]
+    children = [subprocess.Popen([sys.executable, __file__, "--_mode", m, *common], env=env)
+                for m in MODES]
+    if any(c.wait() != 0 for c in children):
+        print("a mode's solves failed", file=sys.stderr)
+        return 1
+    rows = {m: json.loads(p.read_text()) for m, p in paths.items()}
+    summary, moved = compare(rows["shipped"], rows["denser"])
+    meta = {"time": time.strftime("%Y-%m-%d %H:%M:%S"), "python": platform.python_version(),
+            "machine": f"{platform.machine()} {platform.system()}", "seed": args.seed,
+            "problems": args.problems, "factor": args.factor, "mechanisms": args.mechanisms}
+    text = table(summary, moved, rows, args.factor)
+    atomic_write_text(RESULTS / "solve_denser.json",
+                      json.dumps({"meta": meta, "summary": summary, "moved": moved},
+                                 indent=1))
+    atomic_write_text(RESULTS / "solve_denser.md", text)
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -22,13 +22,9 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import math
-import os
 import platform
-import subprocess
 import sys
 import time
-import warnings
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -36,7 +32,8 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from optdesign.outputs.atomic import atomic_write_text  # noqa: E402
-from solve_perturbation import MOVED, compare  # noqa: E402  (the same comparison)
+from solve_perturbation import (MOVED, answer_rows, compare, in_two_processes,  # noqa: E402
+                                moved_lines, summary_lines)
 
 RESULTS = ROOT / "benchmarks" / "results"
 MODES = ("shipped", "denser")
@@ -44,34 +41,20 @@ MECHANISMS = ("fourbar_converter", "slotted_lever", "pulse_reducer")
 
 
 def mode_rows(mode: str, args, path: Path) -> None:
-    """Solve the draws of ``args`` in ``mode``, a row per problem appended to ``path`` as it
-    comes (those there already are kept)."""
+    """Solve the draws of ``args`` of its mechanisms in ``mode`` (:func:`answer_rows`)."""
     import numpy as np
 
     import oracle
-    from optdesign.solver import solve, verify
 
     rng = np.random.default_rng(args.seed)
     draws = [d for d in (oracle.random_draw(rng, i) for i in range(args.problems))
              if d.mechanism in args.mechanisms]
-    rows = json.loads(path.read_text()) if path.exists() else []
-    for draw in draws[len(rows):]:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            problem = oracle.build(draw)
-            if mode == "denser":
-                problem = dataclasses.replace(problem, solver=dataclasses.replace(
-                    problem.solver, screen=args.factor * problem.solver.screen))
-            t0 = time.perf_counter()
-            result = solve(problem)
-            seconds = time.perf_counter() - t0
-            key = float(verify(problem, result.design).key) if result.design else None
-        rows.append({"seed": draw.seed, "mechanism": draw.mechanism,
-                     "objective": problem.objective.minimize, "decades": draw.decades,
-                     "status": result.status, "key": key, "iterations": result.iterations,
-                     "solve_s": seconds})
-        atomic_write_text(path, json.dumps(rows, indent=1))
-        print(f"{mode} {len(rows):4d} {result.status}", flush=True)
+
+    def denser(problem):
+        return dataclasses.replace(problem, solver=dataclasses.replace(
+            problem.solver, screen=args.factor * problem.solver.screen))
+
+    answer_rows(mode, draws, path, denser if mode == "denser" else None)
 
 
 def table(summary: list[dict], moved: list[dict], rows: dict, factor: int) -> str:
@@ -80,21 +63,8 @@ def table(summary: list[dict], moved: list[dict], rows: dict, factor: int) -> st
              f"{factor} times the screened designs: an answer moved when its objective moved "
              f"by more than {MOVED:g} (relative); better or worse for the denser screening. "
              f"Time of all solves: {time_of['shipped']:.0f} s shipped, "
-             f"{time_of['denser']:.0f} s denser.", "",
-             "| mechanism | problems | answers moved | better | worse | status changed |",
-             "|---|---|---|---|---|---|"]
-    for s in summary:
-        lines.append(f"| {s['mechanism']} | {s['problems']} | {s['moved']} | {s['better']} | "
-                     f"{s['worse']} | {s['status_changed']} |")
-    lines += ["", "| problem | mechanism | objective | box [decades] | shipped | denser | "
-              "change |", "|---|---|---|---|---|---|---|"]
-    for r in moved[:20]:
-        change = "status: " + r["status"] + " → " + r["perturbed_status"] \
-            if math.isnan(r["change"]) else f"{r['change']:+.1%}"
-        shipped = "–" if r["shipped"] is None else f"{r['shipped']:.6g}"
-        denser = "–" if r["perturbed"] is None else f"{r['perturbed']:.6g}"
-        lines.append(f"| {r['seed']} | {r['mechanism']} | {r['objective']} | "
-                     f"{r['decades']:.1f} | {shipped} | {denser} | {change} |")
+             f"{time_of['denser']:.0f} s denser.", ""]
+    lines += summary_lines(summary) + [""] + moved_lines(moved, "denser", 20)
     return "\n".join(lines) + "\n"
 
 
@@ -116,13 +86,9 @@ def main(argv=None) -> int:
     if not args.resume:
         for path in paths.values():
             path.unlink(missing_ok=True)
-    env = dict(os.environ, OPTDESIGN_SERVER="off",
-               OPTDESIGN_COMPILE=os.environ.get("OPTDESIGN_COMPILE", "load"))
-    common = ["--problems", str(args.problems), "--seed", str(args.seed), "--factor",
-              str(args.factor), "--mechanisms", *args.mechanisms]
-    children = [subprocess.Popen([sys.executable, __file__, "--_mode", m, *common], env=env)
-                for m in MODES]
-    if any(c.wait() != 0 for c in children):
+    if not in_two_processes(__file__, MODES, [
+            "--problems", str(args.problems), "--seed", str(args.seed), "--factor",
+            str(args.factor), "--mechanisms", *args.mechanisms]):
         print("a mode's solves failed", file=sys.stderr)
         return 1
     rows = {m: json.loads(p.read_text()) for m, p in paths.items()}

@@ -111,22 +111,31 @@ def floor_rows(rounds: int) -> list[dict]:
 
 # --------------------------------------------------------------------------- the answers
 def mode_rows(mode: str, problems: int, seed: int, path: Path) -> None:
-    """Solve the oracle's draws with ``mode``'s options, a row per problem appended to
-    ``path`` as it comes (those there already are kept)."""
+    """Solve the oracle's draws with ``mode``'s options (:func:`answer_rows`)."""
     import numpy as np
 
     import oracle
     from optdesign.solver import nlp as nlp_module
-    from optdesign.solver import solve, verify
 
     nlp_module.IPOPT_OPTIONS.update(MODES[mode])
     rng = np.random.default_rng(seed)
-    draws = [oracle.random_draw(rng, i) for i in range(problems)]
+    answer_rows(mode, [oracle.random_draw(rng, i) for i in range(problems)], path)
+
+
+def answer_rows(label: str, draws, path: Path, prepare=None) -> None:
+    """Solve each of the oracle's ``draws`` (its problem passed through ``prepare`` first,
+    where given), a row per problem (the exact key of the answer: lower is better) appended
+    to ``path`` as it comes; the rows there already are kept, their draws not solved again."""
+    import oracle
+    from optdesign.solver import solve, verify
+
     rows = json.loads(path.read_text()) if path.exists() else []
     for draw in draws[len(rows):]:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             problem = oracle.build(draw)
+            if prepare is not None:
+                problem = prepare(problem)
             t0 = time.perf_counter()
             result = solve(problem)
             seconds = time.perf_counter() - t0
@@ -136,7 +145,42 @@ def mode_rows(mode: str, problems: int, seed: int, path: Path) -> None:
                      "status": result.status, "key": key, "iterations": result.iterations,
                      "solve_s": seconds})
         atomic_write_text(path, json.dumps(rows, indent=1))
-        print(f"{mode} {len(rows):4d} {result.status}", flush=True)
+        print(f"{label} {len(rows):4d} {result.status}", flush=True)
+
+
+def in_two_processes(script: str, modes, arguments: list[str]) -> bool:
+    """``script --_mode M *arguments`` for each mode, all at once (one per core); whether
+    every one ended well."""
+    env = dict(os.environ, OPTDESIGN_SERVER="off",
+               OPTDESIGN_COMPILE=os.environ.get("OPTDESIGN_COMPILE", "load"))
+    children = [subprocess.Popen([sys.executable, script, "--_mode", m, *arguments], env=env)
+                for m in modes]
+    return all([c.wait() == 0 for c in children])
+
+
+def summary_lines(summary: list[dict]) -> list[str]:
+    """The table of :func:`compare`'s counts, per mechanism and for all."""
+    lines = ["| mechanism | problems | answers moved | better | worse | status changed |",
+             "|---|---|---|---|---|---|"]
+    for s in summary:
+        lines.append(f"| {s['mechanism']} | {s['problems']} | {s['moved']} | {s['better']} | "
+                     f"{s['worse']} | {s['status_changed']} |")
+    return lines
+
+
+def moved_lines(moved: list[dict], other: str, most: int) -> list[str]:
+    """The table of the answers that moved (the first ``most``), the second solve's column
+    named ``other``."""
+    lines = [f"| problem | mechanism | objective | box [decades] | shipped | {other} | change |",
+             "|---|---|---|---|---|---|---|"]
+    for r in moved[:most]:
+        change = "status: " + r["status"] + " → " + r["perturbed_status"] \
+            if math.isnan(r["change"]) else f"{r['change']:+.1%}"
+        shipped = "–" if r["shipped"] is None else f"{r['shipped']:.6g}"
+        second = "–" if r["perturbed"] is None else f"{r['perturbed']:.6g}"
+        lines.append(f"| {r['seed']} | {r['mechanism']} | {r['objective']} | "
+                     f"{r['decades']:.1f} | {shipped} | {second} | {change} |")
+    return lines
 
 
 def compare(shipped: list[dict], perturbed: list[dict]) -> tuple[list[dict], list[dict]]:
@@ -182,20 +226,8 @@ def table(floors: list[dict], summary: list[dict], moved: list[dict], rounds: in
     lines += ["", "The solve's answer, on the problems of the verdicts' oracle, with the two "
               f"options as shipped and switched off: an answer moved when its objective moved "
               f"by more than {MOVED:g} (relative); better or worse for the switched-off solve.",
-              "", "| mechanism | problems | answers moved | better | worse | status changed |",
-              "|---|---|---|---|---|---|"]
-    for s in summary:
-        lines.append(f"| {s['mechanism']} | {s['problems']} | {s['moved']} | {s['better']} | "
-                     f"{s['worse']} | {s['status_changed']} |")
-    lines += ["", "| problem | mechanism | objective | box [decades] | shipped | switched off "
-              "| change |", "|---|---|---|---|---|---|---|"]
-    for r in moved[:12]:
-        change = "status: " + r["status"] + " → " + r["perturbed_status"] \
-            if math.isnan(r["change"]) else f"{r['change']:+.1%}"
-        shipped = "–" if r["shipped"] is None else f"{r['shipped']:.6g}"
-        perturbed = "–" if r["perturbed"] is None else f"{r['perturbed']:.6g}"
-        lines.append(f"| {r['seed']} | {r['mechanism']} | {r['objective']} | "
-                     f"{r['decades']:.1f} | {shipped} | {perturbed} | {change} |")
+              ""] + summary_lines(summary)
+    lines += [""] + moved_lines(moved, "switched off", 12)
     return "\n".join(lines) + "\n"
 
 
@@ -216,12 +248,8 @@ def main(argv=None) -> int:
     if not args.resume:
         for path in paths.values():
             path.unlink(missing_ok=True)
-    env = dict(os.environ, OPTDESIGN_SERVER="off",
-               OPTDESIGN_COMPILE=os.environ.get("OPTDESIGN_COMPILE", "load"))
-    children = [subprocess.Popen([sys.executable, __file__, "--_mode", m, "--problems",
-                                  str(args.problems), "--seed", str(args.seed)], env=env)
-                for m in MODES]
-    if any(c.wait() != 0 for c in children):
+    if not in_two_processes(__file__, MODES, ["--problems", str(args.problems), "--seed",
+                                              str(args.seed)]):
         print("a mode's solves failed", file=sys.stderr)
         return 1
     floors = floor_rows(args.rounds)

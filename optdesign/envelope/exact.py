@@ -49,7 +49,7 @@ class Curves:
         self.m = self.n * len(self.signs) + 1
         self._chains: dict = {}          # chain k -> its bound call (Design.chain_call)
         self._ends: dict = {}            # (start, end) -> grid() at a run's two ends
-        self._inside: dict = {}          # (start, end, id of the grid) -> _inside()
+        self._inside: dict = {}          # (start, end) -> (the grid, _inside() on it)
 
     def split(self, c: int) -> tuple[int, int]:
         return c % self.n, self.signs[c // self.n]
@@ -87,9 +87,9 @@ class Curves:
     def inside(self, run: Run, phi: np.ndarray) -> np.ndarray:
         """:func:`_inside` of the run on the grid ``phi``, found once for the run's
         stationary points and its angle increment."""
-        key = (run.start, run.end, id(phi))
+        key = (run.start, run.end)
         out = self._inside.get(key)
-        if out is None or out[0] is not phi:
+        if out is None or out[0] is not phi:        # found on this very grid, or anew
             out = self._inside[key] = (phi, _inside(run, phi))
         return out[1]
 

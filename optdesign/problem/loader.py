@@ -283,7 +283,8 @@ SOLVER_KEYS: tuple[Key, ...] = (
         default=SolverSettings.smoothing, lower=0, open_lower=True, upper=SMOOTHING_MAX),
     Key("seed", "integer", "seed of the screening's sample", default=SolverSettings.seed,
         lower=0, upper=2**32 - 1),
-    Key("max_iter", "integer", "IPOPT iterations per polish", default=SolverSettings.max_iter,
+    Key("max_iter", "integer", "IPOPT iterations per run (three times as many in a box "
+        "where a range spans two decades or more)", default=SolverSettings.max_iter,
         lower=1, upper=COUNTS["max_iter"]),
     Key("hessian", "choice", "IPOPT's Hessian: a limited-memory quasi-Newton one, or CasADi's "
         "exact second derivatives", default=SolverSettings.hessian, choices=HESSIANS),

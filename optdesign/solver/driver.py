@@ -384,11 +384,16 @@ class _Polishing:
         self.improved_at = 0          # the polish that last improved on the best
 
     def polish(self, values: dict, ver: Verification | None = None) -> Outcome:
-        """IPOPT from ``values`` (its start's check ``ver``, when done already), recorded."""
+        """IPOPT from ``values`` (its start's check ``ver``, when done already), recorded: a
+        secondary polish (with a budget, stopped where it stalls or joins) beside a converged
+        optimum; without one, a polish of its own to the end. A known design (where a polish
+        that did not converge stopped, the file's own) is a candidate, not an optimum: beside
+        it a basin is polished in full (a box of decades, where the first polish runs out of
+        iterations and every later one stalled under the budget)."""
         self.solver.avoid = [o.values for o in self.optima]
         try:
             outcome = self.solver.solve_from(dict(values), ver=ver,
-                                             secondary=self.best is not None)
+                                             secondary=bool(self.optima))
         finally:
             self.solver.avoid = []
         return self.record(outcome)
@@ -471,6 +476,24 @@ class _Polishing:
             if self.best is None and outcome.record.note and \
                     verdicts.count(outcome.record.note) >= s.agree + 1:
                 return
+
+    def converged(self) -> bool:
+        """Whether a polish of the count converged to a design that meets every constraint."""
+        return bool(self.optima)
+
+    def rescue(self) -> None:
+        """Where no polish converged, each polish the secondary budget stopped (on its way:
+        neither stalled nor joined to an optimum) is run again from its start to its end, in
+        the screening's order, until one converges (within ``solver.starts`` polishes). The budget spares the time of a further
+        basin beside an optimum found; with none found, the stopped polishes are the count's
+        best leads (on a box of decades a basin whose polish needs 75 iterations is stopped at
+        50 while the first polish runs out of iterations)."""
+        stopped = [o.record.start for o in self.outcomes
+                   if o.record.ipopt_status == EXHAUSTED]
+        for values in stopped:
+            if self.converged() or self.polished >= self.problem.solver.starts:
+                return
+            self.polish(values)
 
     def lines(self) -> None:
         """Line screening through the best optimum: a basin beside its face is polished while
@@ -580,6 +603,7 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
     if reach is not None and reach.design is not None:
         seeds.insert(0, _seed(problem, reach.design))   # meets every bound: polish it first
     work.basins(seeds)
+    work.rescue()
     work.lines()
     if work.best is None and relax and reach is None:
         reach = _reach(problem, count, _binding_of(result), workers,

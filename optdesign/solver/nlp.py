@@ -51,6 +51,7 @@ from optdesign.quantities.criteria import (constraints_of, interval_quantities, 
                                            spec_forms, spec_sides,
                                            quantity_specs)
 from optdesign.solver import compiled
+from optdesign.solver.screening import iterations_of
 
 IPOPT_OPTIONS = {
     "ipopt.print_level": 0,
@@ -658,7 +659,7 @@ class PhaseNLP:
             if self.watch is None:
                 self.watch = _Watch(self.n_x, self.n_g, self.layout.find(self.layout.x,
                                                                           "lengths"))
-            opts = dict(IPOPT_OPTIONS) | {"ipopt.max_iter": self.problem.solver.max_iter,
+            opts = dict(IPOPT_OPTIONS) | {"ipopt.max_iter": iterations_of(self.problem),
                                           "ipopt.hessian_approximation": hessian,
                                           "iteration_callback": self.watch}
             self._solvers[hessian] = compiled.nlpsol(f"nlp_n{self.count}", self.x_sym,

@@ -37,7 +37,7 @@ from optdesign.solver.refine import refine
 from optdesign.solver.result import PhaseResult, SolveResult, StartRecord
 from optdesign.solver.robust import (next_scenarios, robust_verdict, screened_cases,
                                      worst_cases)
-from optdesign.solver.screening import line_seeds, screen
+from optdesign.solver.screening import line_seeds, of_decades, screen
 from optdesign.solver.verify import TOL_ANGLE_DEG, Verification, start_guess, verify
 
 SUCCESS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
@@ -198,11 +198,13 @@ class PhaseSolver:
             trial = values | run.lengths
             # Where the run ends decides what follows; the exact check of where it stopped is
             # made only where something reads it (a stopped or retried run keeps its start's)
-            if status == "Maximum_Iterations_Exceeded" and hessian == "limited-memory" \
-                    and not secondary:
+            if hessian == "limited-memory" and not secondary and (
+                    status == "Maximum_Iterations_Exceeded" or
+                    status == "Infeasible_Problem_Detected" and of_decades(problem)):
                 # The quasi-Newton run stalled: once more from the same start with CasADi's
                 # exact Hessian, which converges, or certifies local infeasibility, where
-                # L-BFGS wanders.
+                # L-BFGS wanders (in a box of decades, given three times the iterations, it
+                # wanders far enough to call a feasible start's basin infeasible)
                 hessian = "exact"
                 continue
             if status == STALLED:

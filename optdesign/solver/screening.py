@@ -125,14 +125,18 @@ WIDE_FACTOR = 8
 WIDE_ITERATIONS = 3
 
 
-def iterations_of(problem) -> int:
-    """IPOPT's iterations per run: ``solver.max_iter``, :data:`WIDE_ITERATIONS` times as
-    many in a box of decades."""
+def of_decades(problem) -> bool:
+    """Whether a free length's range spans :data:`LOG_SPAN` or more (a box of decades)."""
     free = problem.free_lengths()
     lower = np.array([problem.design[k].lower for k in free])
     upper = np.array([problem.design[k].upper for k in free])
-    factor = WIDE_ITERATIONS if free and np.any(wide(lower, upper)) else 1
-    return factor * problem.solver.max_iter
+    return bool(free) and bool(np.any(wide(lower, upper)))
+
+
+def iterations_of(problem) -> int:
+    """IPOPT's iterations per run: ``solver.max_iter``, :data:`WIDE_ITERATIONS` times as
+    many in a box of decades."""
+    return (WIDE_ITERATIONS if of_decades(problem) else 1) * problem.solver.max_iter
 
 
 def wide(lower: np.ndarray, upper: np.ndarray) -> np.ndarray:

@@ -12,8 +12,10 @@ import dataclasses
 from pathlib import Path
 from types import SimpleNamespace
 
+import pytest
+
 from optdesign.problem.loader import load_problem
-from optdesign.solver.driver import EXHAUSTED, Outcome, _Polishing
+from optdesign.solver.driver import EXHAUSTED, Outcome, PhaseSolver, _Polishing, _Run
 from optdesign.solver.result import PhaseResult, StartRecord
 from optdesign.solver.screening import WIDE_ITERATIONS, iterations_of
 
@@ -145,3 +147,28 @@ def test_a_basin_beside_a_known_design_is_polished_in_full():
     work.polish(starts[1])
     work.polish(starts[2])
     assert solver.calls == [(starts[1]["l0"], False), (starts[2]["l0"], True)]
+
+
+@pytest.mark.parametrize("decades", [False, True])
+def test_a_quasi_newton_verdict_of_infeasibility_is_retried_in_a_box_of_decades(monkeypatch,
+                                                                                  decades):
+    """Given three times the iterations in a box of decades, L-BFGS can wander far enough to
+    call a basin infeasible that the exact Hessian converges in (the oracle's draw 195, a
+    slotted lever in a box of five decades): there, and only there, the run is retried."""
+    problem = load_problem(DISC)
+    if decades:
+        free = problem.free_lengths()[0]
+        lower = problem.design[free].lower
+        problem = _with_range(problem, free, lower, 1000 * lower)
+    count = 6
+    start = problem.start_values() | {problem.model.count_variable: count}
+    hessians = []
+
+    def infeasible(self, problem, ver, tightening, hessian, budget=None):
+        hessians.append(hessian)
+        return _Run(status="Infeasible_Problem_Detected", iterations=7, lengths={},
+                    surrogate=0.5, multiplier=0.0, at_window=False, binding="", active=[])
+
+    monkeypatch.setattr(PhaseSolver, "_ipopt", infeasible)
+    PhaseSolver(problem, count).solve_from(dict(start))
+    assert hessians == (["limited-memory", "exact"] if decades else ["limited-memory"])

@@ -125,9 +125,12 @@ def mode_rows(mode: str, problems: int, seed: int, path: Path) -> None:
 def answer_rows(label: str, draws, path: Path, prepare=None) -> None:
     """Solve each of the oracle's ``draws`` (its problem passed through ``prepare`` first,
     where given), a row per problem (the exact key of the answer: lower is better) appended
-    to ``path`` as it comes; the rows there already are kept, their draws not solved again."""
+    to ``path`` as it comes; the rows there already are kept, their draws not solved again.
+    ``converged``: the polishes that converged to a design meeting every constraint, over
+    the counts (0: the answer is a design where a polish stopped, or a screened one)."""
     import oracle
     from optdesign.solver import solve, verify
+    from optdesign.solver.driver import SUCCESS
 
     rows = json.loads(path.read_text()) if path.exists() else []
     for draw in draws[len(rows):]:
@@ -143,7 +146,9 @@ def answer_rows(label: str, draws, path: Path, prepare=None) -> None:
         rows.append({"seed": draw.seed, "mechanism": draw.mechanism,
                      "objective": problem.objective.minimize, "decades": draw.decades,
                      "status": result.status, "key": key, "iterations": result.iterations,
-                     "solve_s": seconds})
+                     "solve_s": seconds,
+                     "converged": sum(1 for phase in result.per_phase for r in phase.starts
+                                      if r.feasible and r.ipopt_status in SUCCESS)})
         atomic_write_text(path, json.dumps(rows, indent=1))
         print(f"{label} {len(rows):4d} {result.status}", flush=True)
 
@@ -168,10 +173,10 @@ def summary_lines(summary: list[dict]) -> list[str]:
     return lines
 
 
-def moved_lines(moved: list[dict], other: str, most: int) -> list[str]:
-    """The table of the answers that moved (the first ``most``), the second solve's column
-    named ``other``."""
-    lines = [f"| problem | mechanism | objective | box [decades] | shipped | {other} | change |",
+def moved_lines(moved: list[dict], other: str, most: int, first: str = "shipped") -> list[str]:
+    """The table of the answers that moved (the first ``most``), the first solve's column
+    named ``first``, the second's ``other``."""
+    lines = [f"| problem | mechanism | objective | box [decades] | {first} | {other} | change |",
              "|---|---|---|---|---|---|---|"]
     for r in moved[:most]:
         change = "status: " + r["status"] + " → " + r["perturbed_status"] \

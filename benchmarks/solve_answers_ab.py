@@ -1,0 +1,149 @@
+"""The solve's answers at two commits, on the verdicts' oracle's problems: does a change of
+the solver find better designs or worse ones, change a status, and at what cost in time?
+
+The oracle's draws (``--problems``, ``--seed``, ``--mechanisms``: the same draws as
+``benchmarks/solve_oracle.py``) are solved with the code of ``--base`` (a git worktree in a
+temporary folder, given this tree's benchmark scripts, so that both trees solve the very same
+problems) and with the working tree, in two processes at once (one per core). The answers are
+compared on the problem's own objective (the exact key of each: lower is better; "better" is
+the working tree's); per tree, the statuses, the `optimal` answers that rest on no converged
+polish (a design where a polish stopped, or a screened one) and the time of all solves.
+
+    python benchmarks/solve_answers_ab.py --base 84c47e9 [--problems 300] [--seed 0]
+        [--mechanisms fourbar_converter slotted_lever pulse_reducer] [--resume]
+
+Writes benchmarks/results/solve_answers_ab.md and .json (each tree's rows also in
+``solve_answers_ab_<tree>.json`` as they come: ``--resume`` goes on from them).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+RESULTS = ROOT / "benchmarks" / "results"
+TREES = ("base", "head")
+MECHANISMS = ("fourbar_converter", "slotted_lever", "pulse_reducer")
+#: this tree's scripts that the base tree runs (the draws and the rows, the same code)
+SCRIPTS = ("oracle.py", "solve_perturbation.py", "solve_answers_ab.py")
+
+
+def tree_rows(args) -> None:
+    """Solve the draws of ``args`` with this process's tree (``ROOT``), rows to ``--_out``."""
+    import numpy as np
+
+    import oracle
+    import optdesign
+    from solve_perturbation import answer_rows
+
+    print(f"{args._tree}: the code of {Path(optdesign.__file__).parent}", flush=True)
+    rng = np.random.default_rng(args.seed)
+    draws = [d for d in (oracle.random_draw(rng, i) for i in range(args.problems))
+             if d.mechanism in args.mechanisms]
+    answer_rows(args._tree, draws, Path(args._out))
+
+
+def in_both_trees(base: Path, args, paths: dict) -> bool:
+    """Each tree's solves (its own copy of this script), both at once; whether both ended
+    well."""
+    env = dict(os.environ, OPTDESIGN_SERVER="off",
+               OPTDESIGN_COMPILE=os.environ.get("OPTDESIGN_COMPILE", "load"))
+    env.pop("PYTHONPATH", None)
+    children = []
+    for name, tree in (("base", base), ("head", ROOT)):
+        children.append(subprocess.Popen(
+            [sys.executable, str(tree / "benchmarks" / "solve_answers_ab.py"), "--_tree", name,
+             "--_out", str(paths[name]), "--problems", str(args.problems), "--seed",
+             str(args.seed), "--mechanisms", *args.mechanisms, "--base", args.base],
+            cwd=tree, env=env))
+    return all([c.wait() == 0 for c in children])
+
+
+def tree_lines(rows: dict) -> list[str]:
+    """Per tree: its statuses, the `optimal` answers on no converged polish, its time."""
+    lines = ["| tree | problems | optimal | infeasible | failed | optimal on no converged "
+             "polish | time of all solves [s] |", "|---|---|---|---|---|---|---|"]
+    for name in TREES:
+        mine = rows[name]
+        count = {s: sum(1 for r in mine if r["status"] == s)
+                 for s in ("optimal", "infeasible", "failed")}
+        stopped = sum(1 for r in mine if r["status"] == "optimal" and r["converged"] == 0)
+        lines.append(f"| {name} | {len(mine)} | {count['optimal']} | {count['infeasible']} | "
+                     f"{count['failed']} | {stopped} | {sum(r['solve_s'] for r in mine):.0f} |")
+    return lines
+
+
+def table(rows: dict, summary: list[dict], moved: list[dict], base: str) -> str:
+    from solve_perturbation import MOVED, moved_lines, summary_lines
+
+    lines = [f"The solve's answers on the problems of the verdicts' oracle with the code of "
+             f"{base} (base) and of the working tree (head), each tree in a process of its "
+             f"own, both at once: an answer moved when its objective moved by more than "
+             f"{MOVED:g} (relative); better or worse for head.", ""]
+    lines += tree_lines(rows) + [""] + summary_lines(summary) + [""]
+    lines += moved_lines(moved, "head", 30, first="base")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--base", required=True, help="the commit to compare the working tree with")
+    ap.add_argument("--problems", type=int, default=300)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--mechanisms", nargs="+", choices=MECHANISMS, default=list(MECHANISMS))
+    ap.add_argument("--resume", action="store_true")
+    ap.add_argument("--_tree", choices=TREES, help=argparse.SUPPRESS)
+    ap.add_argument("--_out", help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+    if not 1 <= args.problems <= 10_000:
+        ap.error("--problems must be 1 to 10000")
+    if args._tree:
+        tree_rows(args)
+        return 0
+    paths = {name: RESULTS / f"solve_answers_ab_{name}.json" for name in TREES}
+    if not args.resume:
+        for path in paths.values():
+            path.unlink(missing_ok=True)
+    with tempfile.TemporaryDirectory(prefix="optdesign-answers-") as tmp:
+        base = Path(tmp) / "base"
+        subprocess.run(["git", "worktree", "add", "--detach", "-q", str(base), args.base],
+                       cwd=ROOT, check=True)
+        try:
+            for script in SCRIPTS:
+                shutil.copy2(ROOT / "benchmarks" / script, base / "benchmarks" / script)
+            ok = in_both_trees(base, args, paths)
+        finally:
+            subprocess.run(["git", "worktree", "remove", "--force", str(base)], cwd=ROOT)
+    if not ok:
+        print("a tree's solves failed", file=sys.stderr)
+        return 1
+    from optdesign.outputs.atomic import atomic_write_text
+    from solve_perturbation import compare
+
+    rows = {name: json.loads(p.read_text()) for name, p in paths.items()}
+    summary, moved = compare(rows["base"], rows["head"])
+    meta = {"time": time.strftime("%Y-%m-%d %H:%M:%S"), "python": platform.python_version(),
+            "machine": f"{platform.machine()} {platform.system()}", "base": args.base,
+            "seed": args.seed, "problems": args.problems, "mechanisms": args.mechanisms}
+    text = table(rows, summary, moved, args.base)
+    atomic_write_text(RESULTS / "solve_answers_ab.json",
+                      json.dumps({"meta": meta, "summary": summary, "moved": moved},
+                                 indent=1))
+    atomic_write_text(RESULTS / "solve_answers_ab.md", text)
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

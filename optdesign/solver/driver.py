@@ -486,10 +486,11 @@ class _Polishing:
     def rescue(self) -> None:
         """Where no polish converged, each polish the secondary budget stopped (on its way:
         neither stalled nor joined to an optimum) is run again from its start to its end, in
-        the screening's order, until one converges (within ``solver.starts`` polishes). The budget spares the time of a further
-        basin beside an optimum found; with none found, the stopped polishes are the count's
-        best leads (on a box of decades a basin whose polish needs 75 iterations is stopped at
-        50 while the first polish runs out of iterations)."""
+        the screening's order, until one converges (within ``solver.starts`` polishes). The
+        budget spares the time of a further basin beside an optimum found; with none found,
+        the stopped polishes are the count's best leads (on a box of decades a basin whose
+        polish needs 75 iterations is stopped at 50 while the first polish runs out of
+        iterations)."""
         stopped = [o.record.start for o in self.outcomes
                    if o.record.ipopt_status == EXHAUSTED]
         for values in stopped:

@@ -1,6 +1,8 @@
 """Polishes on a box of decades: where no polish of a count converged, the polishes the
-secondary budget stopped are run again to their end (``_Polishing.rescue``), and every IPOPT
-run has ``WIDE_ITERATIONS`` times ``solver.max_iter`` iterations (``iterations_of``).
+secondary budget stopped are run again to their end (``_Polishing.rescue``) and a basin
+beside a known design is polished in full; in a box of decades every IPOPT run has
+``WIDE_ITERATIONS`` times ``solver.max_iter`` iterations (``iterations_of``) and an L-BFGS
+verdict of local infeasibility is retried with the exact Hessian.
 
 Found by ``benchmarks/solve_denser.py``: on the oracle's four-bar boxes of two to five
 decades, 14 of 96 counts ended `optimal` at a design where a polish that ran out of

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import platform
 import shutil
 import subprocess
@@ -57,9 +56,10 @@ def tree_rows(args) -> None:
 def in_both_trees(base: Path, args, paths: dict) -> bool:
     """Each tree's solves (its own copy of this script), both at once; whether both ended
     well."""
-    env = dict(os.environ, OPTDESIGN_SERVER="off",
-               OPTDESIGN_COMPILE=os.environ.get("OPTDESIGN_COMPILE", "load"))
-    env.pop("PYTHONPATH", None)
+    from solve_perturbation import solving_env
+
+    env = solving_env()
+    env.pop("PYTHONPATH", None)         # each tree's own code, from its own folder
     children = []
     for name, tree in (("base", base), ("head", ROOT)):
         children.append(subprocess.Popen(

@@ -153,11 +153,17 @@ def answer_rows(label: str, draws, path: Path, prepare=None) -> None:
         print(f"{label} {len(rows):4d} {result.status}", flush=True)
 
 
+def solving_env() -> dict:
+    """The environment of a process that solves the oracle's draws: no warm server, the
+    compiled derivatives loaded where cached (``OPTDESIGN_COMPILE``, ``load`` unless set)."""
+    return dict(os.environ, OPTDESIGN_SERVER="off",
+                OPTDESIGN_COMPILE=os.environ.get("OPTDESIGN_COMPILE", "load"))
+
+
 def in_two_processes(script: str, modes, arguments: list[str]) -> bool:
     """``script --_mode M *arguments`` for each mode, all at once (one per core); whether
     every one ended well."""
-    env = dict(os.environ, OPTDESIGN_SERVER="off",
-               OPTDESIGN_COMPILE=os.environ.get("OPTDESIGN_COMPILE", "load"))
+    env = solving_env()
     children = [subprocess.Popen([sys.executable, script, "--_mode", m, *arguments], env=env)
                 for m in modes]
     return all([c.wait() == 0 for c in children])

@@ -395,7 +395,7 @@ class _Polishing:
         self.solver.avoid = [o.values for o in self.optima]
         try:
             outcome = self.solver.solve_from(dict(values), ver=ver,
-                                             secondary=bool(self.optima))
+                                             secondary=self.converged())
         finally:
             self.solver.avoid = []
         return self.record(outcome)
@@ -480,7 +480,8 @@ class _Polishing:
                 return
 
     def converged(self) -> bool:
-        """Whether a polish of the count converged to a design that meets every constraint."""
+        """Whether a polish of the count converged to a design that meets every constraint
+        (an optimum: a record is feasible only where IPOPT succeeded and the check agrees)."""
         return bool(self.optima)
 
     def rescue(self) -> None:
@@ -650,7 +651,7 @@ def _screened_floor(work: "_Polishing", screening, solver: PhaseSolver) -> None:
     and not a converged polish, or a polish that ended where the output comes to rest once a
     turn (an edge of the NLP, not of the problem), it is refined on the exact check
     (:mod:`.refine`)."""
-    converged = any(r.feasible and r.ipopt_status in SUCCESS for r in work.result.starts)
+    converged = work.converged()
     feasible = [c for c in screening.candidates if c.feasible]
     if not converged:
         ranked = sorted(feasible, key=lambda c: c.score)

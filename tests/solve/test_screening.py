@@ -91,6 +91,61 @@ def test_the_screening_on_two_threads_ranks_the_same_designs_to_the_bit():
     assert [c.values for c in alone.seeds] == [c.values for c in shared.seeds]
 
 
+def _box_rows(p, count, n=512):
+    """The screening's own rows of ``p`` at ``count``: (base, free, X)."""
+    free = p.free_lengths()
+    base = p.start_values() | {p.model.count_variable: count}
+    s = screen(p, count, n)
+    return base, free, np.array([[c.values[k] for k in free] for c in s.candidates])
+
+
+@pytest.mark.parametrize("count, extra", [(24, {}), (6, {"eccentricities": (1.0, 0.5)})])
+def test_rows_tried_for_assembly_first_score_as_one_pass_over_the_grid_to_the_bit(count, extra):
+    """The rows that do not assemble at a few crank angles are dropped before the rest of the
+    grid: every other row's score and violation, and each constraint's missed share, are one
+    pass's over the whole grid to the bit; a dropped row's violation is inf (as the one pass
+    gives), and most of the box's sample is dropped."""
+    from optdesign.solver.screening import grid_samples, _assembling, _scores, sampled_scores
+
+    p = replace(disc_problem(count, 0.344), **extra)
+    base, free, X = _box_rows(p, count)
+    missed: dict = {}
+    score, violation = sampled_scores(p, count, base, free, X, missed=missed)
+    lengths = {k: np.full(len(X), base[k], dtype=float) for k in p.model.lengths}
+    lengths |= {k: X[:, j] for j, k in enumerate(free)}
+    N = grid_samples(p, count)
+    fmap = p.model.speeds_at_once(count, tuple(sorted(p.options.items())))
+    one_missed: dict = {}
+    one_score, one_violation = _scores(p, count, lengths, N, fmap, None, None, one_missed)
+    keep, _ = _assembling(p, lengths, N, fmap)
+    assert violation.tobytes() == one_violation.tobytes()
+    assert score[keep].tobytes() == one_score[keep].tobytes()
+    assert np.all(score[~keep] == np.inf) and np.all(one_violation[~keep] == np.inf)
+    assert list(missed.items()) == list(one_missed.items())
+    assert keep.sum() < len(X) / 2
+
+
+def test_a_box_where_nothing_assembles_misses_no_constraint():
+    """No row assembles: every score and violation inf, each constraint's missed share 0
+    under the names one pass gives."""
+    from optdesign.solver.screening import grid_samples, _scores, sampled_scores
+
+    p = disc_problem(6, 0.344)
+    base = p.start_values() | {"phases": 6}
+    free = p.free_lengths()
+    X = np.full((4, len(free)), 1e-3)       # every link a thousandth of a millimetre
+    X[:, free.index("l0")] = 1e4            # and the frame ten metres: nothing closes
+    missed: dict = {}
+    score, violation = sampled_scores(p, 6, base, free, X, missed=missed)
+    assert np.all(score == np.inf) and np.all(violation == np.inf)
+    lengths = {k: np.full(len(X), base[k], dtype=float) for k in p.model.lengths}
+    lengths |= {k: X[:, j] for j, k in enumerate(free)}
+    one: dict = {}
+    fmap = p.model.speeds_at_once(6, tuple(sorted(p.options.items())))
+    _scores(p, 6, lengths, grid_samples(p, 6), fmap, None, None, one)
+    assert list(missed) == list(one) and all(v == 0.0 for v in missed.values())
+
+
 def test_two_basins_file_start_in_the_worse_one():
     """The disc problem with 12 phases and ratio >= 0.2 has two basins: l3 ≈ 37.9 (angle slack,
     δ = 0.093852) and l3 ≈ 27.1 (transmission angle binding, δ = 0.092800). Started from the

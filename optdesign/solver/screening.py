@@ -540,14 +540,20 @@ def line_seeds(problem, count: int, values: dict) -> list[Candidate]:
     lower = np.array([problem.design[k].lower for k in free])
     upper = np.array([problem.design[k].upper for k in free])
     span = upper - lower
+    lines = [j for j in range(len(free))
+             if min(centre[j] - lower[j], upper[j] - centre[j]) > 1e-6 * span[j]]
+    # every line's designs in one call: each row is evaluated on its own, so its figures are
+    # those of a call per line, and one call's lanes are enough to share between threads
+    line = np.linspace(0.0, 1.0, LINE_POINTS)
+    rows = np.tile(centre, (LINE_POINTS * len(lines), 1))
+    for at, j in enumerate(lines):
+        rows[at * LINE_POINTS:(at + 1) * LINE_POINTS, j] = \
+            spread(line[:, None], lower[j:j + 1], upper[j:j + 1])[:, 0]
+    scores, violations = sampled_scores(problem, count, base, free, rows) if lines else ((), ())
     out = []
-    for j in range(len(free)):
-        if min(centre[j] - lower[j], upper[j] - centre[j]) <= 1e-6 * span[j]:
-            continue
-        X = np.tile(centre, (LINE_POINTS, 1))
-        line = np.linspace(0.0, 1.0, LINE_POINTS)
-        X[:, j] = spread(line[:, None], lower[j:j + 1], upper[j:j + 1])[:, 0]
-        score, violation = sampled_scores(problem, count, base, free, X)
+    for at, j in enumerate(lines):
+        part = slice(at * LINE_POINTS, (at + 1) * LINE_POINTS)
+        X, score, violation = rows[part], scores[part], violations[part]
         ok = violation <= 0
         s = np.where(ok, score, np.inf)
         unit = unit_of(X, lower, upper)

@@ -125,6 +125,35 @@ def test_rows_tried_for_assembly_first_score_as_one_pass_over_the_grid_to_the_bi
     assert keep.sum() < len(X) / 2
 
 
+def test_the_line_screening_scores_every_line_in_one_call_as_line_by_line(monkeypatch):
+    """The lines through an optimum go through the speed function in one call (enough lanes
+    for two threads): each line's scores and violations are those of a call of its own, to
+    the bit."""
+    from optdesign.solver import screening
+
+    p = disc_problem(12, 0.344)
+    result = solve(p)
+    calls = []
+    real = screening.sampled_scores
+
+    def recorded(problem, count, base, free, X, *args, **kwargs):
+        out = real(problem, count, base, free, X, *args, **kwargs)
+        calls.append((base, free, X.copy(), out))
+        return out
+
+    monkeypatch.setattr(screening, "sampled_scores", recorded)
+    screening.line_seeds(p, 12, result.design)
+    assert len(calls) == 1
+    base, free, X, (score, violation) = calls[0]
+    lines, rest = divmod(len(X), screening.LINE_POINTS)
+    assert lines >= 2 and not rest and np.any(violation <= 0)     # l0 and l2 on their bounds
+    for at in range(lines):
+        part = slice(at * screening.LINE_POINTS, (at + 1) * screening.LINE_POINTS)
+        alone = real(p, 12, base, free, X[part])
+        assert alone[0].tobytes() == score[part].tobytes()
+        assert alone[1].tobytes() == violation[part].tobytes()
+
+
 def test_a_box_where_nothing_assembles_misses_no_constraint():
     """No row assembles: every score and violation inf, each constraint's missed share 0
     under the names one pass gives."""

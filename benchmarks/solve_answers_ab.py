@@ -31,6 +31,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
+from optdesign.lifetime import exit_on_sigterm  # noqa: E402
+
 RESULTS = ROOT / "benchmarks" / "results"
 TREES = ("base", "head")
 MECHANISMS = ("fourbar_converter", "slotted_lever", "pulse_reducer")
@@ -61,13 +63,19 @@ def in_both_trees(base: Path, args, paths: dict) -> bool:
     env = solving_env()
     env.pop("PYTHONPATH", None)         # each tree's own code, from its own folder
     children = []
-    for name, tree in (("base", base), ("head", ROOT)):
-        children.append(subprocess.Popen(
-            [sys.executable, str(tree / "benchmarks" / "solve_answers_ab.py"), "--_tree", name,
-             "--_out", str(paths[name]), "--problems", str(args.problems), "--seed",
-             str(args.seed), "--mechanisms", *args.mechanisms, "--base", args.base],
-            cwd=tree, env=env))
-    return all([c.wait() == 0 for c in children])
+    try:
+        for name, tree in (("base", base), ("head", ROOT)):
+            children.append(subprocess.Popen(
+                [sys.executable, str(tree / "benchmarks" / "solve_answers_ab.py"), "--_tree",
+                 name, "--_out", str(paths[name]), "--problems", str(args.problems),
+                 "--seed", str(args.seed), "--mechanisms", *args.mechanisms, "--base",
+                 args.base], cwd=tree, env=env))
+        return all([c.wait() == 0 for c in children])
+    finally:        # interrupted: no tree's solves run on in a worktree about to be removed
+        for child in children:
+            if child.poll() is None:
+                child.terminate()
+                child.wait()
 
 
 def tree_lines(rows: dict) -> list[str]:
@@ -115,7 +123,9 @@ def main(argv=None) -> int:
     if not args.resume:
         for path in paths.values():
             path.unlink(missing_ok=True)
-    with tempfile.TemporaryDirectory(prefix="optdesign-answers-") as tmp:
+    # a SIGTERM raises (exit_on_sigterm), so the worktree below is removed and the rows kept
+    # so far let --resume go on
+    with exit_on_sigterm(), tempfile.TemporaryDirectory(prefix="optdesign-answers-") as tmp:
         base = Path(tmp) / "base"
         subprocess.run(["git", "worktree", "add", "--detach", "-q", str(base), args.base],
                        cwd=ROOT, check=True)

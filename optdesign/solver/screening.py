@@ -463,7 +463,10 @@ class SampledView:
     input_speed: float
 
     def turn(self, quantity, eccentricity: float) -> np.ndarray:
-        """g of a turn quantity at (components, designs, angles) on the screening's grid."""
+        """g of a turn quantity at (components, designs, angles), on :data:`SAMPLES_PER_CURVE`
+        crank angles per chain (at least :data:`SCREEN_SAMPLES`): the screening's own grid for
+        a stroke of one sign, half of it for both strokes (a turn quantity's value is its
+        largest over the turn, read on this grid alone)."""
         model = self.problem.model
         options = tuple(sorted(self.problem.options.items()))
         g, _ = quantity.function(model, self.count, options)

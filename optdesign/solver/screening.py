@@ -261,9 +261,9 @@ def sampled_scores(problem, count, base, free, X, sampled: dict | None = None,
     share of the assembling rows that break each constraint, by its name.
 
     Without ``sampled``, the rows are first tried on every :data:`ASSEMBLY_STRIDE`-th of the
-    grid's crank angles at e = 1 (:func:`_assembling`): a row that does not assemble there does not
-    assemble on the grid (violation inf, score inf) and is not evaluated further; the others
-    are evaluated on the rest of the grid. Each row is computed on its own, so every row's
+    grid's crank angles at e = 1 (:func:`_assembling`): a row that does not assemble there
+    does not assemble on the grid (violation inf, score inf) and is not evaluated further;
+    the others are evaluated on the rest of the grid. Each row is computed on its own, so every row's
     figures are the same to the bit as from one pass over the whole grid (two thirds of a
     box's sample of the four-bar do not assemble: at 24 phases the screening's speed
     function is evaluated at 40 % of the lanes)."""

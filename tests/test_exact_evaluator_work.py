@@ -76,12 +76,20 @@ def test_no_angle_search_where_cos_mu_does_not_move(monkeypatch):
 
 def test_forget_lets_go_of_every_evaluation():
     """After :func:`forget`, a design evaluated before is evaluated anew (a warm process's
-    measure of a new problem), with the same figures."""
+    measure of a new problem), with the same figures; its turn quantities' maxima too."""
+    from optdesign.quantities import base as quantities_base, get_quantity
+
     design = _disc(4)
     first = evaluation.evaluate(design, "forward", 1.0)
     assert evaluation.evaluate(design, "forward", 1.0).per_e[0] is first.per_e[0]
+    housing = get_quantity("housing_radius")
+    maxima = housing.maxima(design)
+    assert housing.maxima(design) is maxima and quantities_base._MAXIMA
     evaluation.forget()
     assert not evaluation._EVALUATED and not evaluation._WORST_CACHE
+    assert not quantities_base._MAXIMA
     again = evaluation.evaluate(design, "forward", 1.0)
     assert again.per_e[0] is not first.per_e[0]
     assert again.per_e[0].figures == first.per_e[0].figures
+    assert housing.maxima(design) is not maxima
+    assert np.array_equal(housing.maxima(design).values, maxima.values)

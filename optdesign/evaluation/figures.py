@@ -18,6 +18,7 @@ from optdesign.envelope.sampled import StrokeFigures, driving_speeds
 from optdesign.errors import AssemblyError, ProblemError
 from optdesign.evaluation.design import Design
 from optdesign.evaluation.regulation import RangeWorst, worst_over_range
+from optdesign.quantities.base import forget_maxima
 from optdesign.quantities.criteria import interval_quantities
 
 
@@ -200,11 +201,13 @@ _WORST_CACHE_SIZE = 32
 
 
 def forget() -> None:
-    """Let go of every evaluation kept (:data:`_EVALUATED`, :data:`_WORST_CACHE`): the next
+    """Let go of every evaluation kept (:data:`_EVALUATED`, :data:`_WORST_CACHE`, and the
+    turn quantities' maxima, :func:`optdesign.quantities.base.forget_maxima`): the next
     evaluation of any design is made anew. For a measure of what a new problem costs a warm
     process: a solve of a problem solved before reads its designs' figures from here."""
     _EVALUATED.clear()
     _WORST_CACHE.clear()
+    forget_maxima()
 
 
 def _worst_of(problem, design: Design) -> RangeWorst:

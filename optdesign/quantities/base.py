@@ -223,6 +223,12 @@ _MAXIMA: dict = {}
 _MAXIMA_SIZE = 256
 
 
+def forget_maxima() -> None:
+    """Let go of every turn quantity's maxima kept (:data:`_MAXIMA`): the next search of any
+    design's is made anew (:func:`optdesign.evaluation.figures.forget` calls it)."""
+    _MAXIMA.clear()
+
+
 @lru_cache(maxsize=256)
 def _tracked(quantity: TurnQuantity, mechanism, count: int, options: tuple):
     g, dg = _functions(quantity, mechanism, count, options)

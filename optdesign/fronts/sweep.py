@@ -110,7 +110,10 @@ class _Pool:
         if interrupted:         # Ctrl-C or an error: do not wait for the points in flight
             for proc in list(getattr(self.pool, "_processes", {}).values()):
                 proc.terminate()
-        self.pool.shutdown(wait=not interrupted, cancel_futures=True)
+        # waited for even when interrupted: the workers are ended, so the pool's manager
+        # thread sees them gone at once; left running, it may read a pipe the interpreter's
+        # exit closes under it ("OSError: [Errno 9] Bad file descriptor" after the last line)
+        self.pool.shutdown(wait=True, cancel_futures=True)
 
 
 class _Dask:

@@ -111,8 +111,9 @@ class _Pool:
             for proc in list(getattr(self.pool, "_processes", {}).values()):
                 proc.terminate()
         # waited for even when interrupted: the workers are ended, so the pool's manager
-        # thread sees them gone at once; left running, it may read a pipe the interpreter's
-        # exit closes under it ("OSError: [Errno 9] Bad file descriptor" after the last line)
+        # thread sees them gone at once; left running beside workers that died, it may use a
+        # pipe the shutdown or the interpreter's exit closes under it ("OSError: [Errno 9]
+        # Bad file descriptor" after the last line; CPython gh-132969, fixed after 3.11)
         self.pool.shutdown(wait=True, cancel_futures=True)
 
 

@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 
+from optdesign.envelope.exact import search_grid
 from optdesign.evaluation.design import Design
 from optdesign.evaluation.figures import evaluate_problem
 from optdesign.problem.loader import load_problem
@@ -145,3 +146,34 @@ def test_the_grid_peaks_of_every_row_at_once_are_each_row_s_own():
     expected = np.array([row_alone(row) for row in grid])
     assert np.array_equal(grid_peaks(grid), expected)
     assert expected.sum() > 9 and expected[4].any() and not expected[5].any()
+
+
+@pytest.mark.parametrize("name", ["housing_radius", "peak_acceleration", "swing"])
+def test_a_function_searched_again_is_searched_by_component_to_the_bit(name, monkeypatch):
+    """A turn quantity's function searched a second time in the process searches each
+    component on a function of its own (a fraction of the instructions): the same maxima
+    and angles to the bit as the whole function gives, on designs of the disc problem at 24
+    phases."""
+    from optdesign.quantities import extremes
+
+    problem = load_problem(ROOT / "problems" / "sharkov2022_disc.yaml")
+    quantity = get_quantity(name)
+    rng = np.random.default_rng(2)
+    designs = []
+    for _ in range(3):
+        values = problem.start_values() | {"phases": 24}
+        values |= {k: values[k] * float(rng.uniform(0.97, 1.03)) for k in problem.free_lengths()}
+        designs.append(Design.from_problem(problem, values))
+    g, dg = quantity.function(designs[0].model, 24, designs[0].option_key)
+    monkeypatch.setattr(extremes, "_SEARCHED", {})
+    searches = []
+    for design in designs:      # the first search whole, the others by component
+        p, phi = design.p_fixed(1.0), search_grid(design, 1.0)
+        searches.append((extremes.turn_maxima(g, dg, p, phi), p, phi))
+    made = extremes._SEARCHED[id(dg)][3]
+    assert made and all(f.n_instructions() < dg.n_instructions() / 4 for f in made.values())
+    monkeypatch.setattr(extremes, "_searched_before", lambda function: False)
+    for found, p, phi in searches:          # the whole function, each again
+        whole = extremes.turn_maxima(g, dg, p, phi)
+        assert found.values.tobytes() == whole.values.tobytes()
+        assert found.angles.tobytes() == whole.angles.tobytes()

@@ -154,8 +154,20 @@ def _sample(function, phi: np.ndarray, p: np.ndarray) -> np.ndarray:
 
 
 #: the functions searched so far, by id: (the function, how often it was searched, its
-#: symbolic inputs and outputs once made, the components' functions made)
+#: symbolic inputs and outputs once made, the components' functions made); at most
+#: :data:`SEARCHED_KEPT`, the oldest let go first (a worker of an atlas meets many counts)
 _SEARCHED: dict = {}
+SEARCHED_KEPT = 64
+
+
+def _record(function) -> list:
+    """``function``'s entry in :data:`_SEARCHED` (made on first use)."""
+    known = _SEARCHED.get(id(function))
+    if known is None or known[0] is not function:
+        while len(_SEARCHED) >= SEARCHED_KEPT:
+            _SEARCHED.pop(next(iter(_SEARCHED)))
+        known = _SEARCHED[id(function)] = [function, 0, None, {}]
+    return known
 
 
 def _searched_before(function) -> bool:
@@ -165,9 +177,7 @@ def _searched_before(function) -> bool:
     next solve) makes each component a function of its own (:func:`component`): building
     them costs about what two searches save (the disc problem at 24 phases: 48 components
     per quantity, a search 37 ms whole, 11 ms by component)."""
-    known = _SEARCHED.get(id(function))
-    if known is None or known[0] is not function:
-        known = _SEARCHED[id(function)] = [function, 0, None, {}]
+    known = _record(function)
     known[1] += 1
     return known[1] > 1
 
@@ -177,9 +187,7 @@ def component(function, i: int):
     from one symbolic call of ``function`` (an SX function holds only the nodes that
     component needs, so a search along it does not evaluate the others: the same operations
     on the same values, the same result to the bit)."""
-    known = _SEARCHED.get(id(function))
-    if known is None or known[0] is not function:
-        known = _SEARCHED[id(function)] = [function, 0, None, {}]
+    known = _record(function)
     if known[2] is None:
         kind = ca.SX if function.is_a("SXFunction") else ca.MX
         args = [kind.sym(function.name_in(k), function.sparsity_in(k))

@@ -289,6 +289,13 @@ def sampled_scores(problem, count, base, free, X, sampled: dict | None = None,
     return score, violation
 
 
+def parameter_rows(model, lengths: dict, e: float) -> np.ndarray:
+    """The mechanism's lengths (arrays over the designs) as its functions' parameter rows at
+    eccentricity ``e``: the regulated length scaled by ``e``, the others as they are."""
+    return np.vstack([lengths[k] * (e if k == model.regulating_variable else 1.0)
+                      for k in model.lengths])
+
+
 def grid_samples(problem, count: int) -> int:
     """Crank samples per turn of the screening's grid: :data:`SAMPLES_PER_CURVE` per rocker
     curve of the stroke, at least :data:`SCREEN_SAMPLES`."""
@@ -309,13 +316,10 @@ def _assembling(problem, lengths: dict, N: int, fmap):
     that may, the speed function's values on the whole grid at e = 1 (those angles' values
     kept, the others evaluated): ``(keep, (dtheta, cos_mu))``, arrays of curves × (kept rows
     · N samples), as one pass over the grid lays them out."""
-    model = problem.model
     S = len(next(iter(lengths.values())))
     m = ASSEMBLY_STRIDE
     grid = np.linspace(0.0, 2 * np.pi, N, endpoint=False).reshape(N // m, m)
-    e = eccentricities_of(problem)[0]
-    P = np.vstack([lengths[k] * (e if k == model.regulating_variable else 1.0)
-                   for k in model.lengths])
+    P = parameter_rows(problem.model, lengths, eccentricities_of(problem)[0])
     with np.errstate(all="ignore"):
         tried = [np.asarray(a).reshape(-1, S, N // m) for a in
                  fmap(np.tile(grid[:, 0], S)[None, :], np.repeat(P, N // m, axis=1))]
@@ -351,8 +355,7 @@ def _scores(problem, count, lengths: dict, N: int, fmap, first, sampled, missed)
     ripples, ratio, envelope = [], None, {}
     with np.errstate(all="ignore"):
         for e in eccentricities_of(problem):
-            P = np.vstack([lengths[k] * (e if k == model.regulating_variable else 1.0)
-                           for k in model.lengths])
+            P = parameter_rows(model, lengths, e)
             if e == 1.0 and first is not None:
                 dth, cos_mu = first
             else:
@@ -473,8 +476,7 @@ class SampledView:
         S = len(next(iter(self.lengths.values())))
         N = max(SCREEN_SAMPLES, SAMPLES_PER_CURVE * self.count)
         phi = np.tile(np.linspace(0.0, 2 * np.pi, N, endpoint=False), S)[None, :]
-        P = np.vstack([self.lengths[k] * (eccentricity if k == model.regulating_variable
-                                          else 1.0) for k in model.lengths])
+        P = parameter_rows(model, self.lengths, eccentricity)
         grid = _sample_lanes(g, phi, np.repeat(P, N, axis=1))
         return grid.reshape(grid.shape[0], S, N)
 

@@ -19,12 +19,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import platform
 import shutil
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -138,20 +136,14 @@ def main(argv=None) -> int:
     if not ok:
         print("a tree's solves failed", file=sys.stderr)
         return 1
-    from optdesign.outputs.atomic import atomic_write_text
-    from solve_perturbation import compare
+    from solve_perturbation import compare, write_results
 
     rows = {name: json.loads(p.read_text()) for name, p in paths.items()}
     summary, moved = compare(rows["base"], rows["head"])
-    meta = {"time": time.strftime("%Y-%m-%d %H:%M:%S"), "python": platform.python_version(),
-            "machine": f"{platform.machine()} {platform.system()}", "base": args.base,
-            "seed": args.seed, "problems": args.problems, "mechanisms": args.mechanisms}
-    text = table(rows, summary, moved, args.base)
-    atomic_write_text(RESULTS / "solve_answers_ab.json",
-                      json.dumps({"meta": meta, "summary": summary, "moved": moved},
-                                 indent=1))
-    atomic_write_text(RESULTS / "solve_answers_ab.md", text)
-    print(text)
+    write_results("solve_answers_ab",
+                  {"base": args.base, "seed": args.seed, "problems": args.problems,
+                   "mechanisms": args.mechanisms},
+                  {"summary": summary, "moved": moved}, table(rows, summary, moved, args.base))
     return 0
 
 

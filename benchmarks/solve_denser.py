@@ -22,18 +22,15 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import platform
 import sys
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from optdesign.outputs.atomic import atomic_write_text  # noqa: E402
 from solve_perturbation import (MOVED, answer_rows, compare, in_two_processes,  # noqa: E402
-                                moved_lines, summary_lines)
+                                moved_lines, summary_lines, write_results)
 
 RESULTS = ROOT / "benchmarks" / "results"
 MODES = ("shipped", "denser")
@@ -93,15 +90,10 @@ def main(argv=None) -> int:
         return 1
     rows = {m: json.loads(p.read_text()) for m, p in paths.items()}
     summary, moved = compare(rows["shipped"], rows["denser"])
-    meta = {"time": time.strftime("%Y-%m-%d %H:%M:%S"), "python": platform.python_version(),
-            "machine": f"{platform.machine()} {platform.system()}", "seed": args.seed,
-            "problems": args.problems, "factor": args.factor, "mechanisms": args.mechanisms}
-    text = table(summary, moved, rows, args.factor)
-    atomic_write_text(RESULTS / "solve_denser.json",
-                      json.dumps({"meta": meta, "summary": summary, "moved": moved},
-                                 indent=1))
-    atomic_write_text(RESULTS / "solve_denser.md", text)
-    print(text)
+    write_results("solve_denser",
+                  {"seed": args.seed, "problems": args.problems, "factor": args.factor,
+                   "mechanisms": args.mechanisms},
+                  {"summary": summary, "moved": moved}, table(summary, moved, rows, args.factor))
     return 0
 
 

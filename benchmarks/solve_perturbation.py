@@ -242,6 +242,18 @@ def table(floors: list[dict], summary: list[dict], moved: list[dict], rounds: in
     return "\n".join(lines) + "\n"
 
 
+def write_results(name: str, settings: dict, document: dict, text: str) -> None:
+    """``benchmarks/results/<name>.json`` (``meta``: when, on what, and ``settings``; then
+    ``document``) and ``<name>.md`` (``text``), each written atomically; ``text`` printed.
+    The oracle's A/B benchmarks (this one, solve_denser, solve_answers_ab) end alike."""
+    meta = {"time": time.strftime("%Y-%m-%d %H:%M:%S"), "python": platform.python_version(),
+            "machine": f"{platform.machine()} {platform.system()}"} | settings
+    atomic_write_text(RESULTS / f"{name}.json",
+                      json.dumps({"meta": meta} | document, indent=1))
+    atomic_write_text(RESULTS / f"{name}.md", text)
+    print(text)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--problems", type=int, default=300)
@@ -266,15 +278,10 @@ def main(argv=None) -> int:
     floors = floor_rows(args.rounds)
     rows = {m: json.loads(p.read_text()) for m, p in paths.items()}
     summary, moved = compare(rows["shipped"], rows["perturbed"])
-    meta = {"time": time.strftime("%Y-%m-%d %H:%M:%S"), "python": platform.python_version(),
-            "machine": f"{platform.machine()} {platform.system()}", "seed": args.seed,
-            "problems": args.problems, "rounds": args.rounds}
-    atomic_write_text(RESULTS / "solve_perturbation.json",
-                      json.dumps({"meta": meta, "floors": floors, "summary": summary,
-                                  "moved": moved}, indent=1))
-    text = table(floors, summary, moved, args.rounds)
-    atomic_write_text(RESULTS / "solve_perturbation.md", text)
-    print(text)
+    write_results("solve_perturbation",
+                  {"seed": args.seed, "problems": args.problems, "rounds": args.rounds},
+                  {"floors": floors, "summary": summary, "moved": moved},
+                  table(floors, summary, moved, args.rounds))
     return 0
 
 

@@ -60,6 +60,8 @@ from solve_vs_peers import CASES, load_case, one_check_seconds, timed_solve  # n
 RESULTS = ROOT / "benchmarks" / "results"
 STAGES = ("build", "screening", "ipopt", "verification")
 MODES = {"vm": "off", "compiled": "load"}
+#: rounds of the race's solves the warm-up runs at most (each starts the builds it misses)
+WARM_UP_ROUNDS = 6
 
 
 # --------------------------------------------------------------------------- in the child
@@ -152,8 +154,10 @@ def run_child(case: str, mode: str, repeats: int) -> dict:
 
 # --------------------------------------------------------------------------- warm-up
 def warm_up(cases, log) -> None:
-    """Compile every NLP the race's solves build into the user's cache, and wait for it."""
-    from optdesign.commands.warmup import recipes_of
+    """Compile every NLP the race's solves build, and every function they run on lanes, into
+    the user's cache, and wait for it: the warm-up's libraries first, then the race's solves
+    (each starting the builds of what it found missing) until a round adds none."""
+    from optdesign.commands.warmup import lanes_recipes_of, recipes_of
     from optdesign.limits import local_processes
     from optdesign.solver import compiled
 
@@ -162,16 +166,22 @@ def warm_up(cases, log) -> None:
         log("no cache folder or no C compiler: measured on the virtual machine")
         return
     for case in cases:
-        recipes = [r for _, r in recipes_of(load_case(case))]
+        problem = load_case(case)
+        recipes = [r for _, r in recipes_of(problem) + lanes_recipes_of(problem)]
         for rec, path, seconds, note in compiled.warm_up(recipes, where, local_processes(0)):
             log(f"{case}: {path} ({note}, {seconds:.1f} s)")
     env = dict(os.environ, OPTDESIGN_COMPILE="on", OPTDESIGN_SERVER="off")
     code = "import sys; from solve_vs_peers import load_case; from optdesign.solver import " \
            "solve; [solve(load_case(c)) for c in sys.argv[1:]]"
-    subprocess.run([sys.executable, "-c", code, *cases], env=env, check=True,
-                   cwd=ROOT / "benchmarks")
-    while any(compiled.building(where, p.stem) for p in where.glob("nlp-*.lock")):
-        time.sleep(1.0)
+    for _ in range(WARM_UP_ROUNDS):
+        before = sorted(where.glob("*.so"))
+        subprocess.run([sys.executable, "-c", code, *cases], env=env, check=True,
+                       cwd=ROOT / "benchmarks")
+        while compiled.builds_under_way(where):        # the NLPs' and the lanes' builds
+            time.sleep(1.0)
+        if sorted(where.glob("*.so")) == before:
+            return
+    log(f"libraries still built after {WARM_UP_ROUNDS} rounds of the race's solves")
 
 
 # --------------------------------------------------------------------------- output

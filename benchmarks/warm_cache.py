@@ -49,8 +49,9 @@ def run(command: list[str], out: Path, mode: str, debug: bool = False,
 
 
 def warm_up(name: str, command: list[str], folder: Path, log) -> None:
-    """Run ``command`` with builds started beside it until every NLP it builds loads a
-    library (each run starts at most one build: it is waited for)."""
+    """Run ``command`` with builds started beside it until every NLP it builds, and every
+    function it runs on lanes, loads a library (each run starts a few builds: they are
+    waited for)."""
     from optdesign.solver import compiled
 
     where = compiled.folder()
@@ -59,9 +60,10 @@ def warm_up(name: str, command: list[str], folder: Path, log) -> None:
         return
     for k in range(WARM_UP_ROUNDS):
         _, err = run(command, folder / f"{name.split()[0]}-warm{k}", "on", debug=True)
-        while any(compiled.building(where, p.stem) for p in where.glob("nlp-*.lock")):
+        while compiled.builds_under_way(where):
             time.sleep(1.0)
         missing = err.count("compiling the NLP's derivatives beside") + \
+            err.count("compiling a function's lanes beside") + \
             err.count("a build is under way")
         log(f"{name}: warm-up run {k + 1}: {err.count('derivatives compiled:')} NLP loads "
             f"from libraries, {missing} without")

@@ -35,8 +35,12 @@ def _no_nlp_built_under_a_patch(request):
 @pytest.fixture
 def own_cache(tmp_path, monkeypatch):
     """An empty cache folder of the user's own, read and written (numerics/user_cache.py)."""
+    from optdesign.numerics import c_library
+
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     monkeypatch.setenv("OPTDESIGN_COMPILE", "on")
+    # no compiler started beside these tests (the compiled lanes' own: test_native_lanes.py)
+    monkeypatch.setattr(c_library, "COMPILER", "optdesign-test-no-compiler")
     return tmp_path / "optdesign"
 
 

@@ -182,7 +182,7 @@ def test_a_kept_file_not_to_be_trusted_is_ignored_and_made_anew(own_cache, spoil
         path.write_bytes(foreign.read_bytes())
     else:
         path.chmod(0o666)
-    where, digest = lanes._cache_of(fn)
+    where, digest = lanes._cache_of(fn.serialize())
     assert lanes._cached(where, digest) is None
     assert _same(Lanes(fn), made, fn)
     assert path.read_bytes() == good and path.stat().st_mode & 0o077 == 0   # made anew

@@ -1,11 +1,14 @@
 """``optdesign warm-up PROBLEM.yaml``: compile the problem's NLPs ahead of its first solve.
 
 A solve that finds no compiled library of its NLP runs on CasADi's virtual machine and starts
-the build beside it (:mod:`optdesign.solver.compiled`); this command builds every admissible
-phase count's NLP now, as many at once as there are cores, and prints where each library is.
-Exit 0 when every library is in place; 1 when none could be built (no C compiler on PATH, no
-cache folder of the user's own, a compiler that failed: solves then run on the virtual
-machine, as before); 2 for bad input (one line naming the file and key).
+the build beside it (:mod:`optdesign.solver.compiled`), and one that finds no compiled lanes
+of the mechanism's kinematics runs them as NumPy statements and starts theirs
+(:mod:`optdesign.numerics.native_lanes`); this command builds every admissible phase count's
+NLP and both lanes (the kinematics, and the speeds the screening reads) now, as many at once
+as there are cores, and prints where each library is. Exit 0 when every library is in place;
+1 when one could not be built (no C compiler on PATH, no cache folder of the user's own, a
+compiler that failed: solves then run on the virtual machine and the NumPy lanes, as
+before); 2 for bad input (one line naming the file and key).
 """
 from __future__ import annotations
 
@@ -35,7 +38,7 @@ def run(args) -> int:
         print(f"optdesign warm-up: no C compiler ({compiled.COMPILER}) on PATH: solves run "
               f"on CasADi's virtual machine", file=sys.stderr)
         return 1
-    labels, recipes = zip(*recipes_of(problem))
+    labels, recipes = zip(*(recipes_of(problem) + lanes_recipes_of(problem)))
     ok = True
     for label, (_, path, seconds, note) in zip(labels, compiled.warm_up(
             recipes, where, local_processes(problem.solver.workers))):
@@ -70,4 +73,21 @@ def recipes_of(problem) -> list[tuple]:
                         + (" (nominal)" if which is not problem else ""),
                         compiled.recipe(nlp.x_sym, nlp.p_sym, nlp.f, nlp.g,
                                         which.solver.hessian)))
+    return out
+
+
+def lanes_recipes_of(problem) -> list[tuple]:
+    """(label, :class:`~optdesign.numerics.c_library.Recipe`) of the compiled lanes of every
+    admissible count's kinematics (the exact evaluator's grids) and speeds (the screening)."""
+    from optdesign.evaluation.design import Design
+    from optdesign.numerics import native_lanes
+
+    out = []
+    for count in problem.counts():
+        design = Design.from_problem(problem, {problem.model.count_variable: count})
+        model, options = design.model, design.option_key
+        for what, fn in (("kinematics", model.kinematics(count, options)),
+                         ("speeds", model.speeds(count, options))):
+            out.append((f"{problem.model.count_variable} = {count}, {what} lanes",
+                        native_lanes.recipe(fn, fn.serialize())))
     return out

@@ -15,6 +15,7 @@ import casadi as ca
 import pytest
 
 from optdesign.commands.warmup import recipes_of
+from optdesign.numerics import c_library
 from optdesign.problem.loader import problem_from_dict
 from optdesign.solver import built as kept_nlps
 from optdesign.solver import compiled, solve
@@ -38,10 +39,11 @@ def recipe_of(problem) -> compiled.Recipe:
 
 
 def nlp_files(where) -> list[str]:
-    """The names of the NLPs' files in the cache folder (the lanes' code and the Sobol
-    samples kept beside them, numerics/lanes.py and numerics/sobol.py, aside)."""
+    """The names of the NLPs' files in the cache folder (the lanes' code, compiled and not,
+    and the Sobol samples kept beside them, numerics/lanes.py, numerics/native_lanes.py and
+    numerics/sobol.py, aside)."""
     return sorted(p.name for p in where.iterdir()
-                  if not p.name.startswith(("lanes-", "sobol-")))
+                  if not p.name.startswith(("lanes-", "sobol-", "native-lanes-")))
 
 
 def wait_for_build(where, name, timeout=300.0) -> None:
@@ -195,7 +197,7 @@ def test_without_a_compiler_the_solve_runs_on_the_virtual_machine(tmp_path, monk
 
 def test_a_failed_build_is_noted_and_not_started_again(tmp_path, monkeypatch, caplog):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
-    monkeypatch.setattr(compiled, "COMPILER", "false")          # a compiler that fails
+    monkeypatch.setattr(c_library, "COMPILER", "false")         # a compiler that fails
     problem = problem_from_dict(vergov_data())
     rec = recipe_of(problem)
     where = compiled.folder()
@@ -230,7 +232,11 @@ def test_warm_up_prints_where_the_libraries_are(cache, capsys, write_problem):
     where, problem, rec, path = cache
     code, out = run_main(["warm-up", write_problem(vergov_data())])
     assert code == 0
-    assert out.strip() == f"sections = 3: {path} (cached)"
+    nlp, *lanes = out.strip().splitlines()
+    assert nlp == f"sections = 3: {path} (cached)"
+    assert [line.split(":")[0] for line in lanes] == ["sections = 3, kinematics lanes",
+                                                      "sections = 3, speeds lanes"]
+    assert all(f" {where}/native-lanes-" in line for line in lanes)
     code, _ = run_main(["warm-up", write_problem("name: x\nmechanism: nothing\n")])
     assert code == 2
     err = capsys.readouterr().err.strip().splitlines()

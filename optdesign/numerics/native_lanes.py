@@ -52,8 +52,9 @@ CHECKED = {
 }
 #: NumPy functions a compiled loop never replaces (see the module's text)
 NEVER = ("power", "erf", "hypot")
-#: arguments per function compared
-SAMPLE = 4096
+#: arguments per function compared (a millisecond of every process that loads a library; a
+#: SIMD kernel of a few units in the last place differs from the C library on most of them)
+SAMPLE = 1024
 
 
 def recipe(fn: ca.Function, serialized: str) -> c_library.Recipe:

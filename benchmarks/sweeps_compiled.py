@@ -17,8 +17,9 @@ each three ways, alternating for ``--pairs`` rounds so that all three meet the s
 * **before**: the code of ``--before`` (default ``ec4c3c0``, the last commit before the NLP's
   derivatives were compiled, where the work on the solve's floor began), exported from this
   repository's history into a temporary folder and run from there;
-* **virtual machine**: this code with ``OPTDESIGN_COMPILE=off``;
-* **compiled**: this code with ``OPTDESIGN_COMPILE=load`` (the libraries in the user's cache).
+* **virtual machine**: this code with ``OPTDESIGN_COMPILE=off`` (the NumPy lanes too);
+* **compiled**: this code with ``OPTDESIGN_COMPILE=load`` (the libraries in the user's cache:
+  the NLPs' derivatives and the lanes compiled to C).
 
 "The sweep alone": the command's own clock of its sweep (``run.wall_time_s`` in pareto.json
 or atlas.json: the points or cells solved, from the pool's start to the last answer), without
@@ -156,7 +157,7 @@ def main() -> int:
     lines = [f"Whole processes, `--workers 2`, the three runs alternating ({args.pairs} rounds; "
              f"medians; each ratio round by round, its range in brackets). Before: the code "
              f"of `{args.before}`; the virtual machine: this code with `OPTDESIGN_COMPILE=off`; "
-             f"compiled: this code, every NLP's library in the user's cache.", "",
+             f"compiled: this code, every NLP's library and the lanes' in the user's cache.", "",
              "| run | before [s] | virtual machine [s] | compiled [s] | before / compiled | "
              "virtual machine / compiled | points or cells | hypervolume (before, now) | "
              "largest δ gap, before / virtual machine | same answer, before / virtual machine |",

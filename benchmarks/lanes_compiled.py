@@ -29,7 +29,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 from optdesign.mechanisms import get_mechanism  # noqa: E402
-from optdesign.numerics import c_library, lanes as lanes_module, native_lanes, user_cache  # noqa: E402
+from optdesign.numerics import c_library, native_lanes, user_cache  # noqa: E402
+from optdesign.numerics import lanes as lanes_module  # noqa: E402
 from optdesign.numerics.lanes import Lanes  # noqa: E402
 from optdesign.outputs.atomic import atomic_write_text  # noqa: E402
 

@@ -35,14 +35,15 @@ import platform
 
 import casadi as ca
 
-from optdesign.numerics.c_library import (COMPILER, FLAGS, MAX_DETACHED_BUILDS, Recipe, build,
-                                          building, builds_under_way, compiler, library, log,
-                                          name_of, start, warm_up)
+from optdesign.numerics.c_library import (COMPILER, FLAGS, Recipe, build, building,
+                                          builds_under_way, compiler, library, log, name_of,
+                                          start, warm_up)
 from optdesign.numerics.user_cache import MODES, VARIABLE, folder, mode
 
-__all__ = ["COMPILER", "FLAGS", "MAX_DETACHED_BUILDS", "MODES", "VARIABLE", "Recipe", "build",
-           "building", "builds_under_way", "compiler", "folder", "library", "log", "mode",
-           "name_of", "nlpsol", "recipe", "start", "warm_up"]
+# the NLP's side of the C libraries, and the names callers of this module have always used
+__all__ = ["COMPILER", "MODES", "VARIABLE", "Recipe", "build", "building", "builds_under_way",
+           "compiler", "folder", "library", "mode", "name_of", "nlpsol", "recipe", "start",
+           "warm_up"]
 
 #: the library's layout (its stamp function, its file names): part of the digest
 FORMAT = 1

@@ -213,3 +213,29 @@ def test_a_missing_library_is_built_beside_and_loaded_next_time(tmp_path, monkey
     assert c_library.library(rec, where) is not None
     assert Lanes(fn).native is not None
     assert not list(where.glob("*.lock")) and not list(where.glob("*.casadi"))
+
+
+def test_a_compiled_call_of_an_exact_grid_is_shared_between_two_threads(loaded, monkeypatch):
+    """Compiled lanes run without the interpreter: a solve shares a call from a design's exact
+    grid on (NATIVE_SHARED_FROM lanes) between its two threads, with the same values."""
+    import threading
+
+    lanes = Lanes(function("fourbar_converter", "kinematics"))
+    if lanes.native is None:
+        pytest.skip("no compiled lanes on this machine")
+    started = []
+    start = threading.Thread.start
+    monkeypatch.setattr(threading.Thread, "start",
+                        lambda self: (started.append(self.name), start(self))[1])
+    rng = np.random.default_rng(3)
+    for count, helpers in ((lanes_module.NATIVE_SHARED_FROM, 1),
+                           (lanes_module.NATIVE_SHARED_FROM - 1, 0)):
+        phi = rng.uniform(0.0, 2 * np.pi, (1, count))
+        p = np.array([[225.0], [20.0], [225.0], [100.0], [56.0]])
+        alone = lanes(phi, p)
+        assert started == []                                # not asked: one thread
+        with lanes_module.threads(2):
+            shared = lanes(phi, p)
+        assert started == ["lanes"] * helpers
+        assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(alone, shared))
+        started.clear()

@@ -54,6 +54,10 @@ CHUNK = 4096
 #: lanes per pass where two threads share the passes: longer passes, so that the interpreter's
 #: share of a statement (held by one thread at a time) is smaller beside the arithmetic
 THREADED_CHUNK = 8192
+#: lanes from which a call of the compiled lanes shares them between two threads (each half
+#: runs on a core of its own, without the interpreter: worth a thread's start from a design's
+#: exact grid on)
+NATIVE_SHARED_FROM = 1024
 #: the threads a call may use (:func:`threads`)
 _THREADS: ContextVar[int] = ContextVar("lanes_threads", default=1)
 #: a cached kernel's trailer tag (:func:`optdesign.numerics.user_cache.trailer`)
@@ -122,6 +126,7 @@ class Lanes:
         outs = [np.empty((rows, L)) for rows in self.sizes_out]
         shared = _THREADS.get() > 1 and L > THREADED_CHUNK
         if self.native is not None:
+            shared = _THREADS.get() > 1 and L >= NATIVE_SHARED_FROM
             for i, a in enumerate(arrays):
                 if a.shape[1] not in (1, L):
                     raise ValueError(f"{self.fn.name()}: input {i} has {a.shape[1]} lanes, "

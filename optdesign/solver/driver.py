@@ -982,14 +982,17 @@ def solve(problem, progress=None) -> SolveResult:
     t0 = time.perf_counter()
     per_phase = []
     counts = problem.counts()
-    for n in counts:
-        neighbours = [p.design for p in per_phase[-1:] if p.status == "optimal"]
-        # one count is the answer if any is: its sensitivities on its own evaluation
-        per_phase.append(solve_phase(problem, n, neighbours=neighbours,
-                                     sensitivities=len(counts) == 1))
-        if progress:
-            progress()
-    return summarized(problem, per_phase, t0)
+    # the solve owns its cores: a call of the compiled lanes (an exact check's grid) shares its
+    # lanes between them (optdesign.numerics.lanes.threads; the same values to the bit)
+    with lanes.threads(workers_for(problem)):
+        for n in counts:
+            neighbours = [p.design for p in per_phase[-1:] if p.status == "optimal"]
+            # one count is the answer if any is: its sensitivities on its own evaluation
+            per_phase.append(solve_phase(problem, n, neighbours=neighbours,
+                                         sensitivities=len(counts) == 1))
+            if progress:
+                progress()
+        return summarized(problem, per_phase, t0)
 
 
 def summarized(problem, per_phase: list[PhaseResult], t0: float) -> SolveResult:

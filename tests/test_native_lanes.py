@@ -216,8 +216,9 @@ def test_a_missing_library_is_built_beside_and_loaded_next_time(tmp_path, monkey
 
 
 def test_a_compiled_call_of_an_exact_grid_is_shared_between_two_threads(loaded, monkeypatch):
-    """Compiled lanes run without the interpreter: a solve shares a call from a design's exact
-    grid on (NATIVE_SHARED_FROM lanes) between its two threads, with the same values."""
+    """Compiled lanes run without the interpreter: a solve shares a call of enough work (a
+    design's exact grid of the four-bar's kinematics) between its two threads, with the same
+    values; a shorter call is not worth a thread's start."""
     import threading
 
     lanes = Lanes(function("fourbar_converter", "kinematics"))
@@ -228,8 +229,9 @@ def test_a_compiled_call_of_an_exact_grid_is_shared_between_two_threads(loaded, 
     monkeypatch.setattr(threading.Thread, "start",
                         lambda self: (started.append(self.name), start(self))[1])
     rng = np.random.default_rng(3)
-    for count, helpers in ((lanes_module.NATIVE_SHARED_FROM, 1),
-                           (lanes_module.NATIVE_SHARED_FROM - 1, 0)):
+    least = -(-lanes_module.NATIVE_SHARED_WORK // lanes.instructions)     # lanes, rounded up
+    assert least <= 1024                                    # an exact grid is shared
+    for count, helpers in ((least, 1), (least - 1, 0)):
         phi = rng.uniform(0.0, 2 * np.pi, (1, count))
         p = np.array([[225.0], [20.0], [225.0], [100.0], [56.0]])
         alone = lanes(phi, p)

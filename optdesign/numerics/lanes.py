@@ -54,10 +54,12 @@ CHUNK = 4096
 #: lanes per pass where two threads share the passes: longer passes, so that the interpreter's
 #: share of a statement (held by one thread at a time) is smaller beside the arithmetic
 THREADED_CHUNK = 8192
-#: lanes from which a call of the compiled lanes shares them between two threads (each half
-#: runs on a core of its own, without the interpreter: worth a thread's start from a design's
-#: exact grid on)
-NATIVE_SHARED_FROM = 1024
+#: the work (lanes × the function's instructions) from which a call of the compiled lanes
+#: shares its lanes between two threads: each half runs on a core of its own, without the
+#: interpreter, which pays a thread's start from about a millisecond of work on (a design's
+#: exact grid of the four-bar's kinematics at 6 phases: 1024 lanes × 1780 instructions;
+#: ``benchmarks/lanes_compiled.py``)
+NATIVE_SHARED_WORK = 1_000_000
 #: the threads a call may use (:func:`threads`)
 _THREADS: ContextVar[int] = ContextVar("lanes_threads", default=1)
 #: a cached kernel's trailer tag (:func:`optdesign.numerics.user_cache.trailer`)
@@ -105,6 +107,7 @@ class Lanes:
         self.n_in = fn.n_in()
         self.sizes_in = [fn.nnz_in(i) for i in range(fn.n_in())]
         self.sizes_out = [fn.nnz_out(i) for i in range(fn.n_out())]
+        self.instructions = fn.n_instructions()
         for i in range(fn.n_in()):
             if not fn.sparsity_in(i).is_dense() or fn.size2_in(i) != 1:
                 raise NotImplementedError(f"{fn.name()}: input {i} is not a dense column")
@@ -126,7 +129,7 @@ class Lanes:
         outs = [np.empty((rows, L)) for rows in self.sizes_out]
         shared = _THREADS.get() > 1 and L > THREADED_CHUNK
         if self.native is not None:
-            shared = _THREADS.get() > 1 and L >= NATIVE_SHARED_FROM
+            shared = _THREADS.get() > 1 and L * self.instructions >= NATIVE_SHARED_WORK
             for i, a in enumerate(arrays):
                 if a.shape[1] not in (1, L):
                     raise ValueError(f"{self.fn.name()}: input {i} has {a.shape[1]} lanes, "

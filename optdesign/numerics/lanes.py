@@ -28,7 +28,7 @@ serialises it, of this module's own text and of the Python that compiled it: a l
 loads the very same code (a millisecond), so the values are the same to the bit.
 
 Where the same function compiled to C is in the cache, and gives these statements' values to
-the bit (:mod:`optdesign.numerics.native_lanes`), a call runs it instead: 1.3 to 5 times
+the bit (:mod:`optdesign.numerics.native_lanes`), a call runs it instead: 1.4 to 3.9 times
 faster, and a call shared between two threads runs on both cores at once.
 """
 from __future__ import annotations

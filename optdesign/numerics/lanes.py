@@ -112,10 +112,11 @@ class Lanes:
             if not fn.sparsity_in(i).is_dense() or fn.size2_in(i) != 1:
                 raise NotImplementedError(f"{fn.name()}: input {i} is not a dense column")
         text = _serialized(fn)
-        self._kernel = _compile(fn, text)
+        where, digest = _cache_of(text)
+        self._kernel = _compile(fn, where, digest)
         #: the same function compiled to C, where it is cached and gives the same bits
         #: (:mod:`optdesign.numerics.native_lanes`); else None and the NumPy kernel runs
-        self.native = native_lanes.load(fn, text, set(self._kernel.__code__.co_names))
+        self.native = native_lanes.load(fn, text, where, set(self._kernel.__code__.co_names))
 
     def __call__(self, *args) -> list[np.ndarray]:
         if len(args) != self.n_in:
@@ -127,7 +128,6 @@ class Lanes:
                                  f"expected {rows}")
         L = max(a.shape[1] for a in arrays) if arrays else 1
         outs = [np.empty((rows, L)) for rows in self.sizes_out]
-        shared = _THREADS.get() > 1 and L > THREADED_CHUNK
         if self.native is not None:
             shared = _THREADS.get() > 1 and L * self.instructions >= NATIVE_SHARED_WORK
             for i, a in enumerate(arrays):
@@ -143,6 +143,7 @@ class Lanes:
                 for first, last in mine:
                     self.native(arrays, outs, first, last)
         else:
+            shared = _THREADS.get() > 1 and L > THREADED_CHUNK
             step = THREADED_CHUNK if shared else CHUNK
             parts = [slice(start, min(start + step, L)) for start in range(0, L, step)]
 
@@ -186,11 +187,10 @@ def threads(count: int):
         _THREADS.reset(token)
 
 
-def _compile(fn: ca.Function, text: str | None):
+def _compile(fn: ca.Function, where: Path | None, digest: str):
     """The instruction list as the body of one Python function over NumPy arrays (its code
-    from the user's cache where it is kept there, else compiled and kept; ``text``: ``fn``
-    serialised, :func:`_serialized`)."""
-    where, digest = _cache_of(text)
+    from the user's cache folder ``where`` where it is kept there under ``digest``, else
+    compiled and kept: :func:`_cache_of`)."""
     code = _cached(where, digest)
     if code is None:
         code = compile(_source(fn), f"<lanes {fn.name()}>", "exec")

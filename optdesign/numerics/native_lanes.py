@@ -145,14 +145,14 @@ class Native:
             raise MemoryError(f"{self.path.name}: the compiled lanes returned {flag}")
 
 
-def load(fn: ca.Function, serialized: str | None, functions: set[str]) -> Native | None:
-    """``fn``'s compiled lanes from the user's cache, or None: ``OPTDESIGN_COMPILE=off``, no
-    folder of the user's own, a function whose values the C library would change
-    (:func:`eligible`), or no library yet (under ``on``, its build is started beside)."""
-    if serialized is None or user_cache.mode() == "off" or not eligible(functions):
-        return None
-    where = user_cache.folder()
-    if where is None:
+def load(fn: ca.Function, serialized: str | None, where: Path | None,
+         functions: set[str]) -> Native | None:
+    """``fn``'s compiled lanes from the user's cache folder ``where`` (the one the NumPy
+    kernel's code is kept in: None under ``OPTDESIGN_COMPILE=off`` or without a folder of the
+    user's own), or None: no folder, a function CasADi cannot write (``serialized`` None), a
+    function whose values the C library would change (:func:`eligible`), or no library yet
+    (under ``on``, its build is started beside)."""
+    if serialized is None or where is None or not eligible(functions):
         return None
     rec = recipe(fn, serialized)
     path = c_library.library(rec, where)

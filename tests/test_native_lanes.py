@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from optdesign.commands.warmup import lanes_recipes_of
-from optdesign.mechanisms import get_mechanism
+from optdesign.mechanisms import get_mechanism, known
 from optdesign.numerics import c_library, lanes as lanes_module, native_lanes, user_cache
 from optdesign.numerics.lanes import Lanes
 from optdesign.problem.loader import problem_from_dict
@@ -23,8 +23,7 @@ from tests.conftest import ROOT, file_data
 
 pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="no gcc on PATH")
 
-FUNCTIONS = [(name, what) for name in ("fourbar_converter", "slotted_lever", "pulse_reducer")
-             for what in ("kinematics", "speeds")]
+FUNCTIONS = [(name, what) for name in known() for what in ("kinematics", "speeds")]
 
 
 def function(name: str, what: str, count: int = 6):
@@ -110,7 +109,7 @@ def _fingerprint(result) -> dict:
 
 def _fresh_lanes() -> None:
     """Every mechanism's lanes made anew (each decides at birth whether it runs compiled)."""
-    for name in ("fourbar_converter", "slotted_lever", "pulse_reducer"):
+    for name in known():
         model = get_mechanism(name)
         model.kinematic_lanes.cache_clear()
         model.speed_lanes.cache_clear()

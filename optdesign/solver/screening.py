@@ -282,10 +282,11 @@ def sampled_scores(problem, count, base, free, X, sampled: dict | None = None,
         kept = {k: v[keep] for k, v in lengths.items()}
         score[keep], violation[keep] = _scores(problem, count, kept, N, fmap, first, None,
                                                missed)
-    elif missed is not None:        # no row assembles: no share breaks a constraint
+    elif missed is not None:        # no row assembles: no share breaks a constraint (named in
+        # _scores' order: the other constraints, then the transmission angles)
         named = [c for c in constraints_of(problem) if not isinstance(c, SectionConstraint)]
-        missed.update({c.name: 0.0 for c in named if not isinstance(c, TransmissionAngle)})
-        missed.update({c.name: 0.0 for c in named if isinstance(c, TransmissionAngle)})
+        missed.update({c.name: 0.0
+                       for c in sorted(named, key=lambda c: isinstance(c, TransmissionAngle))})
     return score, violation
 
 

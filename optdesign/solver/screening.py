@@ -12,6 +12,7 @@ The driver polishes the best basins with IPOPT.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -66,12 +67,32 @@ class Screening:
                 "basins": len(self.seeds), "critical_distance": self.radius}
 
 
-def screen(problem, count: int, n_designs: int, extra: list[dict] = (),
-           sampled: dict | None = None) -> Screening:
-    """Screen ``n_designs`` Sobol designs (:data:`WIDE_FACTOR` times as many in a box of
-    decades) and the designs in ``extra``; seeds best first. ``sampled``, when given,
-    receives the sampled ``delta`` and ``ratio`` of every candidate (arrays in the
-    candidates' order: a Pareto sweep filters them by ratio >= ε)."""
+@dataclass
+class Scored:
+    """The box's sample of one count scored on the screening's grid (the file's design and
+    the Sobol designs, no other): each row's sampled objective key and largest violation,
+    and the share of the assembling rows that break each constraint."""
+
+    count: int
+    X: np.ndarray
+    score: np.ndarray
+    violation: np.ndarray
+    missed: dict
+    seconds: float = 0.0        # the time it took
+
+    @property
+    def promise(self) -> float:
+        """The best sampled objective key of any design that assembles, every other
+        constraint aside (inf where none assembles): what the count's optimum may be
+        expected to reach, the constraints only raising it (:func:`promise`)."""
+        fine = np.isfinite(self.violation)
+        return float(np.min(self.score[fine])) if fine.any() else math.inf
+
+
+def _box(problem, count: int, n_designs: int, extra: list[dict] = ()):
+    """(free, base, lower, upper, X): the rows a screening scores, the file's design first,
+    then ``extra``, then ``n_designs`` Sobol designs of the box (:data:`WIDE_FACTOR` times as
+    many in a box of decades)."""
     free = problem.free_lengths()
     base = problem.start_values() | {problem.model.count_variable: count}
     lower = np.array([problem.design[k].lower for k in free])
@@ -82,9 +103,53 @@ def screen(problem, count: int, n_designs: int, extra: list[dict] = (),
     if free:
         rows += list(spread(sobol.unit_sample(len(free), n_designs, problem.solver.seed),
                             lower, upper))
-    X = np.array(rows).reshape(len(rows), len(free))
+    return free, base, lower, upper, np.array(rows).reshape(len(rows), len(free))
+
+
+def _with_extra(problem, count: int, base: dict, free: list, scored: Scored,
+                extra: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict]:
+    """(score, violation, missed) of the rows ``scored`` holds with the rows ``extra`` after
+    its first (the file's design): only ``extra`` scored here. Each missed share is that of
+    all the assembling rows (a share counts rows: it adds up exactly)."""
+    if not len(extra):
+        return scored.score, scored.violation, dict(scored.missed)
     missed: dict = {}
-    score, violation = sampled_scores(problem, count, base, free, X, sampled, missed)
+    score, violation = sampled_scores(problem, count, base, free, extra, None, missed)
+    fine = [int(np.isfinite(v).sum()) for v in (scored.violation, violation)]
+    merged = {name: (round(scored.missed[name] * fine[0]) + round(missed[name] * fine[1])) /
+              sum(fine) if sum(fine) else 0.0 for name in scored.missed}
+    return (np.concatenate([scored.score[:1], score, scored.score[1:]]),
+            np.concatenate([scored.violation[:1], violation, scored.violation[1:]]), merged)
+
+
+def promise(problem, count: int, n_designs: int) -> Scored:
+    """The box's sample of ``count`` scored as :func:`screen` scores it without ``extra``
+    designs (the same rows, the same values to the bit): its :attr:`Scored.promise` ranks
+    the counts before any is polished, and :func:`screen` given it scores nothing again."""
+    t0 = time.perf_counter()
+    free, base, _, _, X = _box(problem, count, n_designs)
+    missed: dict = {}
+    score, violation = sampled_scores(problem, count, base, free, X, None, missed)
+    return Scored(count, X, score, violation, missed, time.perf_counter() - t0)
+
+
+def screen(problem, count: int, n_designs: int, extra: list[dict] = (),
+           sampled: dict | None = None, scored: Scored | None = None) -> Screening:
+    """Screen ``n_designs`` Sobol designs (:data:`WIDE_FACTOR` times as many in a box of
+    decades) and the designs in ``extra``; seeds best first. ``sampled``, when given,
+    receives the sampled ``delta`` and ``ratio`` of every candidate (arrays in the
+    candidates' order: a Pareto sweep filters them by ratio >= ε). ``scored``: the same
+    count's :func:`promise`, whose rows are these but ``extra``'s: they are not scored again
+    (without ``sampled``; each row's figures are its own, so the same to the bit)."""
+    free, base, lower, upper, X = _box(problem, count, n_designs, extra)
+    box = np.delete(X, np.s_[1:1 + len(extra)], axis=0)     # the file's design, the sample
+    if scored is not None and sampled is None and scored.count == count and \
+            np.array_equal(scored.X, box):
+        score, violation, missed = _with_extra(problem, count, base, free, scored,
+                                               X[1:1 + len(extra)])
+    else:
+        missed = {}
+        score, violation = sampled_scores(problem, count, base, free, X, sampled, missed)
     if free and sampled is None and not np.any(violation <= 0):
         X, score, violation = toward_feasible(problem, count, base, free, lower, upper,
                                               X, score, violation)

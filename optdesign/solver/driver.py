@@ -29,7 +29,7 @@ from optdesign.quantities.criteria import (LengthConstraint, bound_excess, const
                                            interval_quantities, objective_of,
                                            quantity_specs, quantity_tolerance,
                                            searched_quantities)
-from optdesign.solver import built
+from optdesign.solver import built, count_order
 from optdesign.solver.accuracy import solve_accuracy
 from optdesign.solver.nlp import Held, PhaseNLP, SECONDARY_BUDGET, is_robust
 from optdesign.solver.reachable import reach_of
@@ -37,7 +37,7 @@ from optdesign.solver.refine import refine
 from optdesign.solver.result import PhaseResult, SolveResult, StartRecord
 from optdesign.solver.robust import (next_scenarios, robust_verdict, screened_cases,
                                      worst_cases)
-from optdesign.solver.screening import line_seeds, of_decades, screen
+from optdesign.solver.screening import Scored, line_seeds, of_decades, screen
 from optdesign.solver.verify import TOL_ANGLE_DEG, Verification, start_guess, verify
 
 SUCCESS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
@@ -558,14 +558,17 @@ def workers_for(problem) -> int:
 
 def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
                 workers: int | None = None, neighbours: list[dict] = (),
-                explain: bool = True, sensitivities: bool = False) -> PhaseResult:
+                explain: bool = True, sensitivities: bool = False,
+                scored: Scored | None = None) -> PhaseResult:
     """Best verified optimum of one phase count: screen (on ``workers`` threads; default
     :func:`workers_for`; 1 with a given ``solver``, whose built NLPs are kept for re-use),
     then polish the best basins (:meth:`_Polishing.basins`). ``neighbours``: optima of other
     phase counts, screened with the box (continuation: the optimum of n - 1 often lies in
     the best basin of n, and ranks first when it does). ``sensitivities``: the optimum's
     block computed here, on the evaluation its polish verified (a solve of one count;
-    otherwise :func:`summarized` computes the answer's alone).
+    otherwise :func:`summarized` computes the answer's alone). ``scored``: the count's box
+    sample scored already (:func:`~optdesign.solver.screening.promise`), used where the
+    screening has no neighbour to add.
 
     The verdict is a claim with its evidence. The design the file gives (its fixed and
     initial values) is a candidate as it is, so the answer is never worse than it. With
@@ -589,7 +592,7 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
     basins = solver.nominal_solver() if robust else solver
     with basins.timings.stage("screening"), lanes.threads(workers):
         screening = screen(basins.problem, count, problem.solver.screen,
-                           extra=list(neighbours))
+                           extra=list(neighbours), scored=None if robust else scored)
     result = PhaseResult(count, "failed", screening=screening.to_dict())
     work = _Polishing(basins.problem, count, basins, result, workers)
     given = problem.start_values() | {problem.model.count_variable: count}
@@ -978,21 +981,33 @@ def _every_quantity_searched(problem, ev):
 
 
 def solve(problem, progress=None) -> SolveResult:
-    """Solve the problem for every admissible phase count and pick the best verified one."""
+    """Solve the problem for every admissible phase count and pick the best verified one:
+    the counts in the order of their promise, a count that cannot beat the best optimum found
+    not polished (:mod:`optdesign.solver.count_order`)."""
     t0 = time.perf_counter()
-    per_phase = []
+    per_phase: list[PhaseResult] = []
     counts = problem.counts()
+    objective = objective_of(problem)
     # the solve owns its cores: a call of the compiled lanes (an exact check's grid) shares its
     # lanes between them (optdesign.numerics.lanes.threads; the same values to the bit)
     with lanes.threads(workers_for(problem)):
-        for n in counts:
-            neighbours = [p.design for p in per_phase[-1:] if p.status == "optimal"]
-            # one count is the answer if any is: its sensitivities on its own evaluation
-            per_phase.append(solve_phase(problem, n, neighbours=neighbours,
-                                         sensitivities=len(counts) == 1))
+        for n, scored in count_order.ranked(problem):
+            best = min((p for p in per_phase if p.status == "optimal"),
+                       key=objective.result_key, default=None)
+            if count_order.outranked(problem, scored, best):
+                per_phase.append(count_order.outranked_result(problem, scored, best))
+            else:
+                polished = [p for p in per_phase if p.status != count_order.OUTRANKED]
+                neighbours = [p.design for p in polished[-1:] if p.status == "optimal"]
+                # one count is the answer if any is: its sensitivities on its own evaluation
+                result = solve_phase(problem, n, neighbours=neighbours,
+                                     sensitivities=len(counts) == 1, scored=scored)
+                if scored is not None:
+                    result.timings["screening"] += scored.seconds
+                per_phase.append(result)
             if progress:
                 progress()
-        return summarized(problem, per_phase, t0)
+        return summarized(problem, sorted(per_phase, key=lambda p: p.count), t0)
 
 
 def summarized(problem, per_phase: list[PhaseResult], t0: float) -> SolveResult:

@@ -34,7 +34,7 @@ class PhaseResult:
     evaluator."""
 
     count: int
-    status: str                  # optimal | infeasible | failed
+    status: str                  # optimal | infeasible | failed | outranked (count_order)
     design: dict[str, float] | None = None
     delta: float | None = None                   # exact, worst over the listed eccentricities
     ratio: float | None = None                   # exact, at e = 1

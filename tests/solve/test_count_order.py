@@ -68,6 +68,10 @@ def test_the_counts_are_ranked_only_where_it_was_measured(free_design):
     assert not count_order.ranks(replace(free_design, design=wide))
     ratio = load_problem(ROOT / "problems" / "pulse_reducer_solve.yaml")   # -ratio
     assert len(ratio.counts()) > 1 and not count_order.ranks(ratio)
+    robust = load_problem(ROOT / "problems" / "robust_fourbar.yaml")
+    key = robust.model.count_variable
+    robust = replace(robust, design={**robust.design, key: free_design.design[key]})
+    assert len(robust.counts()) > 1 and not count_order.ranks(robust)    # a tolerance box
     one = load_problem(ROOT / "problems" / "sharkov2022_disc.yaml")
     assert not count_order.ranks(one)
     assert count_order.ranked(one) == [(6, None)]

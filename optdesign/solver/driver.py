@@ -25,6 +25,7 @@ from optdesign.evaluation.sensitivity import sensitivity_record
 from optdesign.lifetime import interrupts_kept
 from optdesign.numerics import lanes
 from optdesign.quantities import design_quantities, get_quantity
+from optdesign.quantities.bounds import file_key
 from optdesign.quantities.criteria import (LengthConstraint, bound_excess, constraints_of,
                                            interval_quantities, objective_of,
                                            quantity_specs, quantity_tolerance,
@@ -581,7 +582,7 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
         fixed = _fixed_infeasible(problem, count)
         if fixed is not None:
             return fixed
-    out_of_reach = _beyond_the_box(problem, count)
+    out_of_reach = _bounds_crossed(problem, count) or _beyond_the_box(problem, count)
     if out_of_reach is not None:
         return out_of_reach
     if workers is None:
@@ -886,6 +887,23 @@ def _same_optimum(problem, a: Outcome, b: Outcome) -> bool:
         abs(ka - kb) <= SAME_KEY_REL * max(1e-3, abs(kb))
 
 
+def _bounds_crossed(problem, count: int) -> PhaseResult | None:
+    """A quantity whose lower bound lies above its upper one (two keys of the file that bound
+    one figure, e.g. ``min_transmission_angle_deg: 40`` and ``transmission_angle: {upper:
+    0}``): no design meets both, so the count is ``infeasible`` before any solve."""
+    for spec in problem.constraints.bounds:
+        if spec.lower > spec.upper:
+            unit = get_quantity(spec.name).unit
+            unit = "" if unit in ("", "-") else f" {unit}"
+            keys = [file_key(problem.constraints.spelled, spec.name, side)
+                    for side in ("lower", "upper")]
+            return PhaseResult(
+                count, "infeasible", binding=spec.key,
+                message=f"{spec.key} must be at least {spec.lower:g}{unit} ({keys[0]}) and "
+                        f"at most {spec.upper:g}{unit} ({keys[1]}): no design meets both")
+    return None
+
+
 def _beyond_the_box(problem, count: int) -> PhaseResult | None:
     """A length constraint no design in the bounds can meet, decided from the bounds alone:
     a formula linear in the lengths (the four-bar's pin radius, l2 − l2′) takes its extremes
@@ -1002,8 +1020,9 @@ def solve(problem, progress=None) -> SolveResult:
                 # one count is the answer if any is: its sensitivities on its own evaluation
                 result = solve_phase(problem, n, neighbours=neighbours,
                                      sensitivities=len(counts) == 1, scored=scored)
-                if scored is not None:
-                    result.timings["screening"] += scored.seconds
+                if scored is not None:      # (a count decided before any solve has none)
+                    result.timings["screening"] = (result.timings.get("screening", 0.0) +
+                                                   scored.seconds)
                 per_phase.append(result)
             if progress:
                 progress()

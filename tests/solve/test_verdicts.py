@@ -82,6 +82,12 @@ def test_a_cap_given_as_a_quantity_bound_is_named_so():
     data["constraints"]["ratio"] = {"upper": 0.01}
     result = solve(problem_from_dict(data, where="disc.yaml"))
     assert result.status == "infeasible"
+    # below the file's own floor (min_ratio: 0.344): the two keys cross, said before any solve
+    assert result.message == ("n=6: ratio must be at least 0.344 (objective.min_ratio) and at "
+                              "most 0.01 (constraints.ratio.upper): no design meets both")
+    data["objective"]["min_ratio"] = 0.005          # below the cap: out of reach, verified
+    result = solve(problem_from_dict(data, where="disc.yaml"))
+    assert result.status == "infeasible"
     assert result.message.startswith("n=6: constraints.ratio.upper at most 0.01 is out of "
                                      "reach: the least ratio")
 
@@ -218,3 +224,20 @@ def test_the_bound_the_seen_designs_break_is_relaxed_first():
     assert result.status == "infeasible", result.message
     assert "constraints.ripple.lower" in result.message
     assert result.per_phase[0].reachable["value"] == pytest.approx(2 / 3, rel=1e-6)
+
+
+@pytest.mark.parametrize("name", ["free_design", "sharkov2022_disc"])
+def test_two_keys_that_cross_on_one_figure_are_infeasible_before_any_solve(name):
+    """min_transmission_angle_deg: 40 and transmission_angle: {upper: 30} bound one figure
+    from both sides past each other: every count infeasible at once, both keys named (a
+    problem of several counts, ranked by promise, too: its counts decided before a screening)."""
+    data = _shipped(name)
+    data["constraints"]["transmission_angle"] = {"upper": 30}
+    problem = problem_from_dict(data, where=f"{name}.yaml")
+    result = solve(problem)
+    assert result.status == "infeasible" and result.iterations == 0
+    for phase in result.per_phase:
+        assert phase.status == "infeasible" and phase.binding == "transmission_angle"
+        assert "constraints.min_transmission_angle_deg" in phase.message
+        assert "constraints.transmission_angle.upper" in phase.message
+        assert "no design meets both" in phase.message

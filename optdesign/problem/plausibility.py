@@ -20,7 +20,7 @@ import math
 import warnings
 
 from optdesign.errors import ProblemError, UnitWarning
-from optdesign.quantities.bounds import file_key
+from optdesign.quantities.bounds import side_key
 
 #: lengths below this (mm) are likely metres or centimetres
 SHORTEST_MM = 1.0
@@ -47,9 +47,7 @@ def fraction_bounds(problem) -> list[tuple[str, str, float]]:
                 value = getattr(bound, side)
                 if not math.isfinite(value) or (side == "lower" and value == 0):
                     continue
-                key = file_key(spelled, bound.name, side) if bound.at is None else \
-                    f"constraints.{bound.key}.{side}"
-                out.append((key, bound.name, value))
+                out.append((side_key(spelled, bound, side), bound.name, value))
     return out
 
 

@@ -63,6 +63,13 @@ def file_key(spelled, name: str, side: str) -> str:
                                               f"constraints.{name}.{side}")
 
 
+def side_key(spelled, bound: QuantityBound, side: str) -> str:
+    """The problem file's key of one side of ``bound``: :func:`file_key` at the default
+    eccentricity, ``constraints.NAME@E.SIDE`` for a bound at an eccentricity of its own."""
+    return file_key(spelled, bound.name, side) if bound.at is None else \
+        f"constraints.{bound.key}.{side}"
+
+
 def held_apart(ripple_capped: bool) -> frozenset:
     """The (quantity, side) pairs a criterion of the envelope's own holds: the floors always,
     the ripple's cap where the objective brings it (``ripple_capped``)."""

@@ -25,7 +25,7 @@ from optdesign.evaluation.sensitivity import sensitivity_record
 from optdesign.lifetime import interrupts_kept
 from optdesign.numerics import lanes
 from optdesign.quantities import design_quantities, get_quantity
-from optdesign.quantities.bounds import file_key
+from optdesign.quantities.bounds import side_key
 from optdesign.quantities.criteria import (LengthConstraint, bound_excess, constraints_of,
                                            interval_quantities, objective_of,
                                            quantity_specs, quantity_tolerance,
@@ -895,7 +895,7 @@ def _bounds_crossed(problem, count: int) -> PhaseResult | None:
         if spec.lower > spec.upper:
             unit = get_quantity(spec.name).unit
             unit = "" if unit in ("", "-") else f" {unit}"
-            keys = [file_key(problem.constraints.spelled, spec.name, side)
+            keys = [side_key(problem.constraints.spelled, spec, side)
                     for side in ("lower", "upper")]
             return PhaseResult(
                 count, "infeasible", binding=spec.key,

@@ -225,7 +225,8 @@ def table(data: dict) -> str:
         times = [r["ranked"]["seconds"] / r["every count"]["seconds"] for r in answers]
         lines += ["", f"{same} of {len(answers)} answers the same (status, δ within 1e-9 "
                       f"relative); time ranked / every count: median "
-                      f"{statistics.median(times):.2f}, range {min(times):.2f}–{max(times):.2f}; false verdicts: "
+                      f"{statistics.median(times):.2f}, range {min(times):.2f}–"
+                      f"{max(times):.2f}; false verdicts: "
                       f"{sum(len(r['ranked']['false']) for r in answers)} ranked, "
                       f"{sum(len(r['every count']['false']) for r in answers)} every count."]
     meta = data["meta"]

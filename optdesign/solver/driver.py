@@ -565,8 +565,8 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
     :func:`workers_for`; 1 with a given ``solver``, whose built NLPs are kept for re-use),
     then polish the best basins (:meth:`_Polishing.basins`). ``neighbours``: optima of other
     phase counts, screened with the box (continuation: the optimum of a neighbouring count
-    often lies in the best basin of this one, and ranks first when it does). ``sensitivities``: the optimum's
-    block computed here, on the evaluation its polish verified (a solve of one count;
+    often lies in the best basin of this one, and ranks first when it does).
+    ``sensitivities``: the optimum's block computed here, on the evaluation its polish verified (a solve of one count;
     otherwise :func:`summarized` computes the answer's alone). ``scored``: the count's box
     sample scored already (:func:`~optdesign.solver.screening.promise`), used where the
     screening has no neighbour to add.

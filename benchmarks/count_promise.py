@@ -23,8 +23,8 @@ after a solve that builds every count's NLPs; both answers are judged against th
 checked sample of every count (``oracle.judge``: a false verdict is an ``optimal`` a checked
 design beats, or an ``infeasible``/``failed`` where one is feasible).
 
-Writes ``benchmarks/results/count_promise.{json,md}`` (rows as they come; ``--resume`` goes on
-from the rows written).
+Writes ``benchmarks/results/count_promise.{json,md}`` (each part as it ends; ``--resume`` keeps
+the parts written) and ``docs/figures/count_promise.png``.
 """
 from __future__ import annotations
 
@@ -45,6 +45,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import oracle  # noqa: E402
 
+from optdesign.commands.files import save_figure  # noqa: E402
 from optdesign.errors import ProblemError  # noqa: E402
 from optdesign.evaluation.figures import forget  # noqa: E402
 from optdesign.outputs.atomic import atomic_write_text  # noqa: E402
@@ -234,6 +235,42 @@ def table(data: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def figure(data: dict, path: Path) -> None:
+    """Each count's promise over its optimum (solved alone) against the optimum, log-log, by
+    objective and box, positive keys (the least of a figure: the ripple, a peak speed, ...):
+    above 1 the optimum lies below its promise; the rule leaves a count out beyond its margin."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = [r for r in data["shortfall"] if r["optimum"] and r["promise"] is not None and
+            math.isfinite(r["promise"]) and r["optimum"] > 0 and r["promise"] > 0]
+    fig, ax = plt.subplots(figsize=(7.0, 5.4))
+    groups = (("ripple, under two decades (the rule's domain)", True, False, "C0", "o"),
+              ("ripple, of decades", True, True, "C1", "s"),
+              ("another figure's least", False, None, "0.6", "^"))
+    for label, ripple, decades, colour, marker in groups:
+        group = [r for r in rows if (r["objective"] == "ripple") == ripple and
+                 (decades is None or r["decades"] == decades)]
+        ax.scatter([r["optimum"] for r in group], [r["promise"] / r["optimum"] for r in group],
+                   s=18, c=colour, marker=marker, label=f"{label} ({len(group)})", alpha=0.8)
+    ax.axhline(1.0, color="k", lw=0.8, label="promise = optimum")
+    ax.axhline(1 + data["margin"], color="r", ls="--", lw=0.8,
+               label=f"{1 + data['margin']:g} × the least δ found: beyond it a count is "
+                     f"left out")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("the count's optimum, solved alone (its objective key)")
+    ax.set_ylabel("promise / optimum")
+    ax.set_title("A count's promise (the best sampled design, constraints aside) over its "
+                 "optimum", fontsize=10)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2)
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    save_figure(fig, path, dpi=110, bbox_inches=None)
+    plt.close(fig)
+
+
 def _num(x):
     return "–" if x is None else f"{x:.6f}"
 
@@ -270,6 +307,7 @@ def main(argv=None) -> int:
         save()
     text = table(data)
     atomic_write_text(RESULTS / "count_promise.md", text)
+    figure(data, ROOT / "docs" / "figures" / "count_promise.png")
     print(text)
     return 0
 

@@ -29,7 +29,6 @@ the parts written) and ``docs/figures/count_promise.png``.
 from __future__ import annotations
 
 import argparse
-import copy
 import json
 import math
 import platform
@@ -50,7 +49,7 @@ from optdesign.errors import ProblemError  # noqa: E402
 from optdesign.evaluation.figures import forget  # noqa: E402
 from optdesign.outputs.atomic import atomic_write_text  # noqa: E402
 from optdesign.mechanisms import get_mechanism  # noqa: E402
-from optdesign.problem.loader import Variable, load_problem, problem_from_dict  # noqa: E402
+from optdesign.problem.loader import load_problem  # noqa: E402
 from optdesign.quantities.criteria import objective_of  # noqa: E402
 from optdesign.solver import count_order, solve  # noqa: E402
 from optdesign.solver.nlp import is_robust  # noqa: E402
@@ -68,11 +67,6 @@ def quiet(function, *args):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return function(*args)
-
-
-def with_count(problem, count: int):
-    key = problem.model.count_variable
-    return replace(problem, design={**problem.design, key: Variable(key, value=float(count))})
 
 
 def shipped() -> list[tuple[str, object]]:
@@ -95,7 +89,7 @@ def shortfall_rows(problems) -> list[dict]:
     for name, problem in problems:
         objective = objective_of(problem)
         for count in problem.counts():
-            single = with_count(problem, count)
+            single = problem.with_values({problem.model.count_variable: count})
             result = quiet(solve, single)
             scored = promise(problem, count, problem.solver.screen)
             phase = result.per_phase[0]
@@ -131,25 +125,16 @@ def multi_problems(count: int, seed: int = 7):
         i += 1
         draw = oracle.random_draw(rng, 1000 + i)
         draw = replace(draw, decades=float(rng.uniform(0.3, 1.9)), objective=("ripple", False))
-        data = oracle.problem_data(draw)
-        data["design"][get_mechanism(draw.mechanism).count_variable] = \
-            FREE_COUNTS[draw.mechanism]
-        try:
-            problem = quiet(_built, draw, data)
+        key = get_mechanism(draw.mechanism).count_variable
+        try:        # the oracle's problem with the count freed, read by the loader's rules
+            problem = quiet(lambda: oracle.build(draw).with_design(
+                **{key: FREE_COUNTS[draw.mechanism]}))
         except Exception as exc:                # noqa: BLE001
             print(f"multi {i} left out: {exc}", file=sys.stderr)
             continue
         if count_order.ranks(problem):
             made += 1
             yield f"random {i} ({draw.mechanism})", problem
-
-
-def _built(draw, data):
-    """``oracle.build`` of ``draw`` with the count of ``data`` (free)."""
-    fixed = oracle.build(draw)
-    free = problem_from_dict(copy.deepcopy(data), where="x.yaml")
-    key = fixed.model.count_variable
-    return replace(fixed, design={**fixed.design, key: free.design[key]})
 
 
 def answer_rows(problems) -> list[dict]:

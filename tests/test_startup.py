@@ -66,3 +66,23 @@ def test_a_solve_reads_its_sobol_sample_from_the_cache_without_scipy_stats(tmp_p
     found = [_heavy(_start(code, env)) for _ in range(2)]      # one after the other
     assert "scipy.stats" in found[0] and "scipy.stats" not in found[1]
     assert list((tmp_path / "optdesign").glob("sobol-*.npy"))
+
+
+def test_a_designs_figures_import_nothing_after_their_warm_up(tmp_path):
+    """The figures of a problem's design (``solve``'s speeds and linkage, the front's knee)
+    label it with its exact δ, which needs SciPy's root finder: the figures' process imports
+    it while the command computes (``warm_up(problem)``), not each figure's forked process
+    again after the answer (half a second each)."""
+    code = (f"from optdesign.problem.loader import load_problem\n"
+            f"from optdesign.figures.design import warm_up\n"
+            f"from optdesign.commands.files import _mechanism_png, _speeds_png\n"
+            f"problem = load_problem('problems/sharkov2022_disc.yaml')\n"
+            f"values = problem.start_values() | {{'phases': problem.counts()[0]}}\n"
+            f"warm_up(problem)\n"
+            f"warm = set(sys.modules)\n"
+            f"_speeds_png(problem, values, {str(tmp_path / 'speeds.png')!r}, 'file')\n"
+            f"_mechanism_png(problem, values, {str(tmp_path / 'mechanism.png')!r}, 'file')\n"
+            f"sys.modules = {{k: v for k, v in sys.modules.items() if k not in warm}}")
+    found = _heavy(_start(code))
+    assert found == set(), f"the figures imported {sorted(found)} after the warm-up"
+    assert (tmp_path / "speeds.png").exists() and (tmp_path / "mechanism.png").exists()

@@ -93,6 +93,12 @@ def run(args) -> int:
     out = prepare_out(args.out, problem.name, "_pareto", files=PARETO_FILES,
                       source=None if args.resume else args.problem, force=args.force,
                       record=False)
+    with phase("imports"):
+        # the sweep's worker (the solver and SciPy, most of a second), which its first point
+        # would import: imported before the figures' process is forked, that process has it
+        # too (the knee's figures evaluate the knee exactly) instead of importing SciPy's
+        # optimisation package again in each figure's process after the sweep
+        from optdesign.fronts import worker  # noqa: F401
     # the report's figures are drawn beside, by a process forked before any thread or worker
     # (a Dask client, the sweep's pool) exists; it imports matplotlib while the sweep runs
     with FigureProcess(enabled=not args.no_report, warm=partial(_warm_figures, problem)) \

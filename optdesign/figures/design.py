@@ -27,7 +27,11 @@ def warm_up(problem=None) -> None:
     (:class:`optdesign.outputs.figure_process.FigureProcess`) pays it while it waits.
 
     With ``problem``, also build what the figures of its designs evaluate, for each of its
-    counts (:func:`_build_kinematics`): the design is not known yet, its mechanism is."""
+    counts (:func:`_build_kinematics`): the design is not known yet, its mechanism is; and
+    import the exact evaluator's searches (SciPy's root finder and bounded minimiser), which
+    those figures call (each design's δ in its labels): SciPy's optimisation package takes half
+    a second to import, which each figure, forked from this process, paid again after the
+    answer (``benchmarks/command_latency.py``)."""
     pyplot()
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
@@ -37,6 +41,7 @@ def warm_up(problem=None) -> None:
     FigureCanvasAgg(fig).draw()
     if problem is not None:
         _build_kinematics(problem)
+        import scipy.optimize  # noqa: F401 - the exact evaluator's brentq and minimize_scalar
 
 
 def _build_kinematics(problem) -> None:

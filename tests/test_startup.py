@@ -82,7 +82,9 @@ def test_a_designs_figures_import_nothing_after_their_warm_up(tmp_path):
             f"warm = set(sys.modules)\n"
             f"_speeds_png(problem, values, {str(tmp_path / 'speeds.png')!r}, 'file')\n"
             f"_mechanism_png(problem, values, {str(tmp_path / 'mechanism.png')!r}, 'file')\n"
-            f"sys.modules = {{k: v for k, v in sys.modules.items() if k not in warm}}")
+            f"print(json.dumps([n for n in {HEAVY!r} if n in sys.modules and n not in warm]))\n"
+            f"sys.stdout.flush()\n"
+            f"import os; os._exit(0)      # this line is the last: the probe's own not printed")
     found = _heavy(_start(code))
     assert found == set(), f"the figures imported {sorted(found)} after the warm-up"
     assert (tmp_path / "speeds.png").exists() and (tmp_path / "mechanism.png").exists()

@@ -140,15 +140,23 @@ def plot_map(result):
     return fig
 
 
-def write_charts(result, out) -> list[Path]:
-    """atlas_counts.png and atlas_map.png in ``out``, each atomically."""
+def chart_jobs(result, out) -> list[tuple]:
+    """atlas_counts.png and atlas_map.png in ``out`` as jobs, ``(function, args)`` each, for a
+    :class:`~optdesign.outputs.figure_process.FigureProcess` to draw beside the command."""
     out = Path(out)
-    plt = pyplot()
-    written = []
-    for name, plot in (("atlas_counts.png", plot_counts), ("atlas_map.png", plot_map)):
-        fig = plot(result)
-        try:
-            written.append(atomic_savefig(fig, out / name, dpi=110))
-        finally:
-            plt.close(fig)
-    return written
+    return [(saved_chart, (plot, result, out / name))
+            for name, plot in (("atlas_counts.png", plot_counts), ("atlas_map.png", plot_map))]
+
+
+def saved_chart(plot, result, path: Path) -> Path:
+    """``plot(result)`` saved atomically to ``path``, the figure closed whatever happens."""
+    fig = plot(result)
+    try:
+        return atomic_savefig(fig, path, dpi=110)
+    finally:
+        pyplot().close(fig)
+
+
+def write_charts(result, out) -> list[Path]:
+    """atlas_counts.png and atlas_map.png in ``out``, each atomically, drawn here."""
+    return [function(*args) for function, args in chart_jobs(result, out)]

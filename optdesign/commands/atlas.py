@@ -36,9 +36,11 @@ def run(args) -> int:
     from optdesign.atlas.table import document, write_table
     from optdesign.commands.pareto import _connected
     from optdesign.errors import ProblemError
+    from optdesign.figures.design import warm_up
     from optdesign.lifetime import exit_on_sigterm
     from optdesign.outputs.atomic import json_text
     from optdesign.outputs.checks import prepare_out, resolve_out
+    from optdesign.outputs.figure_process import FigureProcess
     from optdesign.outputs.folder import OutputFolder
 
     spec = load_atlas(args.atlas)
@@ -49,17 +51,24 @@ def run(args) -> int:
     out = prepare_out(args.out, spec.name, files=ATLAS_FILES,
                       source=None if args.resume else args.atlas, force=args.force,
                       record=False)
-    with _connected(args.scheduler) as scheduler, exit_on_sigterm(), \
+    # the charts are drawn beside, by a process forked before any thread or worker (a Dask
+    # client, the cells' pool) exists: it imports matplotlib while the cells are solved, and
+    # draws both charts at once while this process writes the table and the page
+    with FigureProcess(enabled=not args.no_plots, warm=warm_up) as figures, \
+            _connected(args.scheduler) as scheduler, exit_on_sigterm(), \
             OutputFolder(out, ATLAS_FILES, args.atlas) as folder:
         if not args.resume:
             folder.remove_owned()
         result = run_atlas(spec, out, workers=args.workers, resume=args.resume,
                            scheduler=scheduler, progress=not args.json)
+        if not args.no_plots:
+            from optdesign.atlas.charts import chart_jobs
+            from optdesign.atlas.page import write_page
+            figures.draw(chart_jobs(result, out))
         files = write_table(result, out)
         if not args.no_plots:
-            from optdesign.atlas.charts import write_charts
-            from optdesign.atlas.page import write_page
-            files += write_charts(result, out) + [write_page(result, out)]
+            page = write_page(result, out)
+            files += figures.wait() + [page]
     failed = [r for r in result.records if r["status"] not in ("optimal", "infeasible")]
     if args.json:
         print(json_text(document(result)))

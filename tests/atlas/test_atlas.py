@@ -59,3 +59,29 @@ def test_the_command_stays_light_until_it_runs():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          cwd=ROOT, check=True)
     assert out.stdout.strip() == "[]"
+
+
+def test_the_charts_drawn_beside_the_command_are_the_ones_drawn_here(tiny_atlas, tiny_path,
+                                                                      tmp_path):
+    """The command hands its two charts to the figures' process (as pickled jobs: one that
+    does not pickle would be drawn in the command instead, slowly and silently); what that
+    process draws is what write_charts draws in this one, pixel for pixel."""
+    import pickle
+    import shutil
+
+    import numpy as np
+    from PIL import Image
+
+    from optdesign.atlas.charts import chart_jobs, write_charts
+    from optdesign.atlas.run import run_atlas
+    from optdesign.atlas.spec import load_atlas
+
+    out, _ = tiny_atlas
+    again = tmp_path / "again"
+    shutil.copytree(out, again)                 # the journal: every cell resumed, re-verified
+    result = run_atlas(load_atlas(tiny_path), again, workers=1, resume=True, progress=False)
+    jobs = pickle.loads(pickle.dumps(chart_jobs(result, tmp_path)))
+    assert [args[-1].name for _, args in jobs] == ["atlas_counts.png", "atlas_map.png"]
+    for beside, here in zip(sorted(out.glob("atlas_*.png")), write_charts(result, tmp_path)):
+        assert beside.name == here.name
+        assert np.array_equal(np.asarray(Image.open(beside)), np.asarray(Image.open(here)))

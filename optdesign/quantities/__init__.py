@@ -45,6 +45,12 @@ def get_quantity(name: str) -> Quantity:
         raise KeyError(f"unknown quantity {name!r}; known: {', '.join(known())}") from None
 
 
+def unit_text(name: str) -> str:
+    """" mm" after a value of quantity ``name`` (nothing for a unitless one)."""
+    unit = get_quantity(name).unit
+    return "" if unit == "-" else f" {unit}"
+
+
 def quantities_of(evaluation, eccentricities, ripple: str = "midrange",
                   names=None) -> dict:
     """Every quantity's exact value (or those ``names``) of an evaluated design:

@@ -24,7 +24,7 @@ from optdesign.evaluation.regulation import quantities_over_range
 from optdesign.evaluation.sensitivity import sensitivity_record
 from optdesign.lifetime import interrupts_kept
 from optdesign.numerics import lanes
-from optdesign.quantities import design_quantities, get_quantity
+from optdesign.quantities import design_quantities, get_quantity, unit_text
 from optdesign.quantities.bounds import side_key
 from optdesign.quantities.criteria import (LengthConstraint, bound_excess, constraints_of,
                                            interval_quantities, objective_of,
@@ -893,8 +893,7 @@ def _bounds_crossed(problem, count: int) -> PhaseResult | None:
     0}``): no design meets both, so the count is ``infeasible`` before any solve."""
     for spec in problem.constraints.bounds:
         if spec.lower > spec.upper:
-            unit = get_quantity(spec.name).unit
-            unit = "" if unit in ("", "-") else f" {unit}"
+            unit = unit_text(spec.name)
             keys = [side_key(problem.constraints.spelled, spec, side)
                     for side in ("lower", "upper")]
             return PhaseResult(

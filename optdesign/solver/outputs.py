@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from optdesign.evaluation.sensitivity import sensitivity_line
 from optdesign.outputs.units import gear_ratio_text, input_speed_text
-from optdesign.quantities import get_quantity
+from optdesign.quantities import unit_text
 from optdesign.quantities.criteria import (LengthConstraint, constraints_of, objective_of,
                                            quantity_specs)
 
@@ -32,12 +32,12 @@ def summary_text(result, problem) -> str:
         named = [spec for spec in quantity_specs(problem) if spec.key in values]
         if named:
             lines.append("quantities: " + "; ".join(
-                f"{spec.key} = {values[spec.key]:.6g}{_unit_text(spec.name)}"
+                f"{spec.key} = {values[spec.key]:.6g}{unit_text(spec.name)}"
                 for spec in named) + f" (worst over {over})")
         if result.worst_case_delta is not None:
             best = result.best_phase()
             bounded = "".join(
-                f"; the box's worst {key} = {value:.6g}{_unit_text(key.split('@')[0])}"
+                f"; the box's worst {key} = {value:.6g}{unit_text(key.split('@')[0])}"
                 for key, value in (best.worst_case_quantities if best else {}).items())
             lines.append(f"robust: the worst part of the tolerance box has δ = "
                          f"{result.worst_case_delta:.6f} (the objective){bounded}; every "
@@ -124,9 +124,3 @@ def bound_warnings(result, problem) -> list[str]:
                    f"optimum would go past it (d{objective_of(problem).symbol}/d bound = "
                    f"{a['sensitivity']:+.3g} per mm); check that the bound is a real limit")
     return out
-
-
-def _unit_text(name: str) -> str:
-    """" mm" after a value of quantity ``name`` (nothing for a unitless one)."""
-    unit = get_quantity(name).unit
-    return "" if unit == "-" else f" {unit}"

@@ -258,12 +258,12 @@ class _WithoutInterruptWarning:
         return getattr(self.stream, name)
 
 
-def beside(fn, *args):
+def beside(fn, *args) -> "Beside":
     """Start ``fn(*args)`` in a forked child (that dies with this process) and return a
-    function that waits for its value: the child's, or its error raised again here; if the
-    child is lost without a word (killed), or no child can be forked, ``fn(*args)`` is
-    computed in this process when the value is asked for. The child inherits this process's
-    memory, so what was computed before the fork is not computed again."""
+    :class:`Beside`, which waits for its value when called: the child's, or its error raised
+    again here; if the child is lost without a word (killed), or no child can be forked,
+    ``fn(*args)`` is computed in this process when the value is asked for. The child inherits
+    this process's memory, so what was computed before the fork is not computed again."""
     import multiprocessing as mp
 
     try:
@@ -273,21 +273,48 @@ def beside(fn, *args):
         with signals_held():
             child.start()
     except (ValueError, OSError, AssertionError):  # no fork here, or a daemon's child
-        return lambda: fn(*args)
+        return Beside(fn, args, None, None)
     send.close()
+    return Beside(fn, args, child, receive)
 
-    def wait():
+
+class Beside:
+    """A value computed in a child process (:func:`beside`): called, it waits for it;
+    :meth:`cancel` ends the child where the value is no longer wanted (the caller unwinds
+    from an error or a Ctrl-C: a child left alone would compute on, then block on its pipe)."""
+
+    def __init__(self, fn, args, child, receive):
+        self.fn, self.args, self.child, self.receive = fn, args, child, receive
+
+    def __call__(self):
+        if self.child is None:
+            return self.fn(*self.args)
         try:
-            kind, value = receive.recv()
+            kind, value = self.receive.recv()
         except (EOFError, OSError):
             kind, value = "lost", None
         finally:
-            receive.close()
-            child.join()
+            self._close()
         if kind == "error":
             raise value
-        return value if kind == "value" else fn(*args)
-    return wait
+        return value if kind == "value" else self.fn(*self.args)
+
+    def cancel(self) -> None:
+        """End the child, if it still runs, and forget its value (asked for after this,
+        it raises)."""
+        if self.child is not None:
+            self.child.kill()
+            self._close()
+        self.fn = _cancelled
+
+    def _close(self) -> None:
+        self.receive.close()
+        self.child.join()
+        self.child = None
+
+
+def _cancelled(*_):
+    raise RuntimeError("a value computed beside was asked for after its child ended")
 
 
 def _answer(send, parent_pid: int, fn, args) -> None:

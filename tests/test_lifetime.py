@@ -38,6 +38,18 @@ def test_a_lost_child_is_computed_here():
     assert beside(_dies_in_a_child, os.getpid())() == "computed here"
 
 
+def test_a_cancelled_child_ends_and_its_value_is_not_asked_for():
+    import multiprocessing
+    import time
+
+    pending = beside(time.sleep, 60)
+    t0 = time.perf_counter()
+    pending.cancel()
+    assert time.perf_counter() - t0 < 5 and multiprocessing.active_children() == []
+    with pytest.raises(RuntimeError, match="after its child ended"):
+        pending()
+
+
 # --------------------------------------------------------------------------- no Ctrl-C lost
 def _ctrl_c_now():
     """Send this process a SIGINT and give its handler the chance to run."""

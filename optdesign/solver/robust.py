@@ -55,8 +55,12 @@ def worst_cases(problem, values, in_parallel: bool = False) -> tuple:
         return tuple(search(keys)), corner_violations(problem, values, shared)
     prime(problem, values, tolerances, shared)
     others = beside(search, keys[1:])
-    ripple = search(keys[:1])
-    corners = corner_violations(problem, values, shared)
+    try:
+        ripple = search(keys[:1])
+        corners = corner_violations(problem, values, shared)
+    except BaseException:               # a Ctrl-C, an error: the child is not waited for
+        others.cancel()
+        raise
     return tuple(ripple + others()), corners
 
 

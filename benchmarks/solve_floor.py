@@ -17,8 +17,10 @@ Per problem of the race (``benchmarks/solve_vs_peers.py``'s ``CASES``):
   the evaluator's memory of the designs it checked is emptied
   (:func:`optdesign.evaluation.figures.forget`): a warm process solving a problem whose
   designs it has not checked yet, not one repeating its answers; each stage of it
-  (``timings_s``: the NLP's build, the screening, the IPOPT runs, the exact verification; the
-  rest is the sensitivities, the accuracy record, the bookkeeping) and the IPOPT iterations
+  (``timings_s``: the NLP's build, the screening, the IPOPT runs, the exact verification,
+  each summed over the solve's processes, and of these the seconds spent in a process beside
+  the solve's own at the same time (``beside``: the best basins polished at once); the rest
+  is the sensitivities, the accuracy record, the bookkeeping) and the IPOPT iterations
   of the winning run against all of the solve's;
 * **the same solve again**: one more call with that memory kept, as a notebook that solves
   the same file twice runs it (the exact checks of the designs the solve before checked are
@@ -192,6 +194,7 @@ def summary(runs: list[dict]) -> dict:
             "warm_s": statistics.median(w["time_s"] for w in warm),
             "again_s": statistics.median(r["again"]["time_s"] for r in runs),
             "stages_s": {k: statistics.median(w["timings"][k] for w in warm) for k in STAGES},
+            "beside_s": statistics.median(w["timings"].get("beside", 0.0) for w in warm),
             "floor_s": statistics.median(r["floor"]["floor_s"] for r in runs),
             "floor_every_count_s": statistics.median(
                 r.get("floor_every_count_s", r["floor"]["floor_s"]) for r in runs),
@@ -227,15 +230,17 @@ def tables(results: dict) -> str:
                      + (f"{counts}: {1e3 * every:.0f} | {c['warm_s'] / every:.1f}× |"
                         if counts > 1 else "1 | – |") + f" {c['again_s']:.3f} |")
     lines += ["", "| problem | floor: IPOPT + check [ms] | build | screening | IPOPT | "
-              "verification | rest | IPOPT iterations: winning run / solve |",
-              "|---|---|---|---|---|---|---|---|"]
+              "verification | of these, in a process beside the solve's | rest | IPOPT "
+              "iterations: winning run / solve |",
+              "|---|---|---|---|---|---|---|---|---|"]
     for case, r in results.items():
         c = r["compiled"]
         stages = [1e3 * c["stages_s"][k] for k in STAGES]
-        rest = 1e3 * c["warm_s"] - sum(stages)
+        beside = 1e3 * c.get("beside_s", 0.0)
+        rest = 1e3 * c["warm_s"] - (sum(stages) - beside)
         lines.append(f"| {case} | {1e3 * c['floor_ipopt_s']:.0f} + "
                      f"{1e3 * c['floor_check_s']:.0f} | "
-                     + " | ".join(f"{s:.0f}" for s in stages) + f" | {rest:.0f} | "
+                     + " | ".join(f"{s:.0f}" for s in stages) + f" | {beside:.0f} | {rest:.0f} | "
                      f"{c['winning_iterations']} / {c['iterations']} |")
     lines += ["", "| problem | warm, virtual machine [s] | warm, compiled [s] | VM / compiled "
               "| first, virtual machine [s] | first, compiled [s] | floor, VM [ms] | NLPs on a "

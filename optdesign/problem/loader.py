@@ -272,8 +272,8 @@ SOLVER_KEYS: tuple[Key, ...] = (
         default=SolverSettings.screen, lower=1, upper=COUNTS["screen"]),
     Key("basins", "integer", "best basins of the screening polished by IPOPT",
         default=SolverSettings.basins, lower=1, upper=COUNTS["basins"]),
-    Key("workers", "integer", "cores a solve uses: the screening's threads and the tolerance "
-        "analysis's processes (0: every core)",
+    Key("workers", "integer", "cores a solve uses: the screening's threads, the best basins "
+        "polished at once and the tolerance analysis's processes (0: every core)",
         default=SolverSettings.workers, lower=0, upper=COUNTS["workers"]),
     Key("starts", "integer", "most IPOPT polishes per phase count",
         default=SolverSettings.starts, lower=1, upper=COUNTS["starts"]),

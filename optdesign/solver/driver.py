@@ -13,7 +13,7 @@ verified design wins.
 from __future__ import annotations
 
 import time
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import asdict, dataclass, replace
 
 import numpy as np
@@ -75,6 +75,9 @@ class Timings:
     screening: float = 0.0
     ipopt: float = 0.0
     verification: float = 0.0
+    #: of the stages' time above, the seconds spent in a process beside the solve's own, at
+    #: the same time as it (the best basins polished at once: :meth:`_Polishing.basins`)
+    beside: float = 0.0
 
     @contextmanager
     def stage(self, name: str):
@@ -87,6 +90,10 @@ class Timings:
     def add(self, other: "Timings") -> None:
         for k, v in other.to_dict().items():
             setattr(self, k, getattr(self, k) + v)
+
+    def total(self) -> float:
+        """The stages' seconds, summed."""
+        return self.build + self.screening + self.ipopt + self.verification
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -132,15 +139,36 @@ class PhaseSolver:
         for slots, nlp in self._nlps.items():
             if slots >= need:
                 return nlp
-        curves = self.count * len(STROKE_SIGNS[self.problem.stroke])
-        slots = max(need, curves)               # a slot per curve, more if the design has more
+        return self.nlp_of(max(need, self.curves()))   # a slot per curve, more if need be
+
+    def curves(self) -> int:
+        """The count's speed curves (a rocker's stroke each): the NLP's least slots."""
+        return self.count * len(STROKE_SIGNS[self.problem.stroke])
+
+    def nlp_of(self, slots: int) -> PhaseNLP:
+        """The NLP of exactly ``slots`` hand-over slots, held by this solver from now on."""
+        if slots not in self._nlps:
+            self._nlps[slots] = self._kept(slots)
+        return self._nlps[slots]
+
+    def _kept(self, slots: int) -> PhaseNLP:
+        """The process's NLP of this count with ``slots`` slots (:mod:`.built`; built at most
+        once: exactly the one this solver would build, the same run)."""
         kept = built.kept(self.problem, self.count)
-        nlp = kept.get(slots)           # exactly the one this solver would build: the same run
+        nlp = kept.get(slots)
         if nlp is None:
             with self.timings.stage("build"):
                 nlp = kept[slots] = PhaseNLP(self.problem, self.count, slots)
-        self._nlps[slots] = nlp
         return nlp
+
+    def prepare(self) -> None:
+        """Build now, for the process, the NLP a polish of this count most often asks for (a
+        slot per curve) and its IPOPT of the problem's Hessian: a process forked after this
+        inherits them. This solver does not hold it until a polish asks for it (which NLP a
+        polish takes depends on those it holds: :meth:`nlp`)."""
+        nlp = self._kept(self.curves())
+        with self.timings.stage("build"):
+            nlp.solver(self.problem.solver.hessian)
 
     def nominal_solver(self) -> "PhaseSolver":
         """The solver of this robust problem's nominal problem (the design alone, not its
@@ -449,36 +477,106 @@ class _Polishing:
         The best `basins` are polished as if at once, each after the first on a solver of its
         own that knows no optimum the others found (:func:`_polish_beside`): so a basin that
         would join the first's optimum only in passing runs to its end, and the answer does
-        not depend on the worker count. They are polished in turn, not in forked processes:
-        a forked process pays for every page it writes, and two polishes at once share the
-        cores' cache, so on 2 cores the race's problems solve as fast in turn
-        (``benchmarks/solve_time_ab.py``), with one process and the other core left to the
-        figures' process. The later basins are polished here, each stopped once it joins an
-        optimum found already."""
+        not depend on the worker count. With more than one worker they are polished at once:
+        the first here, the next `workers - 1` each in a process forked beside it
+        (:func:`_head_beside`), the rest here after it; each outcome is recorded in the
+        screening's order, as if polished in turn. The later basins are polished in turn,
+        each stopped once it joins an optimum found already; with more than one worker, the
+        next one is begun beside each and kept where the turn would have polished it with the
+        same knowledge (:meth:`_further`). Either way each polish is the one the single
+        process makes, to the bit: only the time differs (``tests/solve/test_built.py``)."""
         s = self.problem.solver
         seeds = list(seeds)
         head = min(s.basins, s.starts, len(seeds))
         if head > 1:
-            self.polish(seeds[0].values)
-            for seed in seeds[1:head]:
-                outcome, timings = _polish_beside(self.problem, self.count, seed.values,
+            self._head([seed.values for seed in seeds[:head]])
+            seeds = seeds[head:]
+        self._further([seed.values for seed in seeds])
+
+    def _head(self, starts: list[dict]) -> None:
+        """The best basins' polishes as if at once (:meth:`basins`): the first here, the
+        next ``workers - 1`` in processes forked beside it, the rest here after it."""
+        others = starts[1:]
+        if self.workers > 1:
+            self.solver.prepare()           # built once, before the processes part
+        at_once = _head_beside(self.problem, self.count, others[:self.workers - 1],
+                               self.solver.checks_in_parallel)
+        try:
+            with lanes.threads(1) if at_once else nullcontext():
+                self.polish(starts[0])
+        except BaseException:
+            for pending in at_once:
+                pending.cancel()
+            raise
+        for k, values in enumerate(others):
+            if k < len(at_once):
+                self._record_beside(*at_once[k]())
+            else:
+                outcome, timings = _polish_beside(self.problem, self.count, values,
                                                   self.solver.checks_in_parallel)
                 self.record(outcome)
                 self.solver.timings.add(timings)
-            seeds = seeds[head:]
-        for seed in seeds:
-            if self.polished >= s.starts:
-                return
-            if self.best is not None and self.polished >= s.basins and (
-                    not self.apart() or
-                    self.polished - max(self.improved_at, s.basins) >= s.basins):
-                return           # agreed, or `basins` more polishes found nothing better
-            outcome = self.polish(seed.values)
-            verdicts = [r.note for r in self.result.starts
-                        if r.ipopt_status == "Infeasible_Problem_Detected"]
-            if self.best is None and outcome.record.note and \
-                    verdicts.count(outcome.record.note) >= s.agree + 1:
-                return
+
+    def _further(self, starts: list[dict]) -> None:
+        """The basins after the best ones, in the screening's order, while they can bring a
+        better optimum (:meth:`basins`). With more than one worker, each polish here is
+        joined by the next one's, begun in a process forked beside it with what the solve
+        knows then (the optima found, the NLPs built): where this polish leaves that
+        unchanged and the next one is due, its outcome is the one this process would
+        have found (the same polish on the same memory), and is taken; else it is dropped
+        and the next one polished here."""
+        s = self.problem.solver
+        ahead = None                # (the start's index, its polish beside, what it knew)
+        try:
+            for i, values in enumerate(starts):
+                if self.polished >= s.starts:
+                    return
+                if self.best is not None and self.polished >= s.basins and (
+                        not self.apart() or
+                        self.polished - max(self.improved_at, s.basins) >= s.basins):
+                    return       # agreed, or `basins` more polishes found nothing better
+                if ahead is not None and ahead[0] == i and ahead[2] == self._known():
+                    outcome = self._record_beside(*ahead[1]())
+                    ahead = None
+                else:
+                    ahead = _cancelled(ahead)
+                    if self.workers > 1 and i + 1 < len(starts) and \
+                            self.polished + 1 < s.starts:
+                        ahead = (i + 1, self._polish_ahead(starts[i + 1]), self._known())
+                    with lanes.threads(1) if ahead else nullcontext():
+                        outcome = self.polish(values)
+                verdicts = [r.note for r in self.result.starts
+                            if r.ipopt_status == "Infeasible_Problem_Detected"]
+                if self.best is None and outcome.record.note and \
+                        verdicts.count(outcome.record.note) >= s.agree + 1:
+                    return
+        finally:
+            _cancelled(ahead)
+
+    def _known(self) -> tuple:
+        """What a polish of this count starts from besides its start: the optima found (it
+        stops where it joins one, and is secondary once there is one) and the NLPs its
+        solver holds (it takes the first with enough slots)."""
+        return (tuple(id(o) for o in self.optima), tuple(self.solver._nlps))
+
+    def _polish_ahead(self, values: dict):
+        """:meth:`polish` of ``values`` with what the solve knows now, begun in a process
+        forked beside this one (:func:`optdesign.lifetime.beside`)."""
+        from optdesign.lifetime import beside
+
+        return beside(_polish_here, self.solver, values, [o.values for o in self.optima],
+                      self.converged())
+
+    def _record_beside(self, outcome: Outcome, timings: Timings, built_slots=()) -> Outcome:
+        """The outcome of a polish made in a process beside this one, recorded as this
+        process's own (its stage times counted as spent beside); the NLPs it built are
+        built here too, in its order, so that this solver holds what it would hold had the
+        polish been made here."""
+        for slots in built_slots:
+            self.solver.nlp_of(slots)
+        self.solver.timings.add(timings)
+        self.solver.timings.beside += timings.total()
+        return self.record(outcome)
 
     def converged(self) -> bool:
         """Whether a polish of the count converged to a design that meets every constraint
@@ -545,9 +643,46 @@ def _polish_beside(problem, count: int, values: dict,
     return solver.solve_from(dict(values), secondary=True), solver.timings
 
 
+def _head_beside(problem, count: int, starts: list[dict],
+                 checks_in_parallel: bool = False) -> list:
+    """:func:`_polish_beside` of each of ``starts``, each begun in a process forked now
+    (:func:`optdesign.lifetime.beside`): called, each waits for its outcome and stage
+    times (computed here if its process is lost). The same polish as in this process, on the
+    same memory: the outcome is the same to the bit. The compiled lanes of each run on one
+    thread (the cores are taken)."""
+    from optdesign.lifetime import beside
+
+    return [beside(_polish_alone, problem, count, values, checks_in_parallel)
+            for values in starts]
+
+
+def _polish_alone(problem, count: int, values: dict, checks_in_parallel: bool):
+    """:func:`_polish_beside` with the compiled lanes on one thread."""
+    with lanes.threads(1):
+        return _polish_beside(problem, count, values, checks_in_parallel)
+
+
+def _polish_here(solver: "PhaseSolver", values: dict, avoid: list[dict], secondary: bool):
+    """:meth:`_Polishing.polish`'s own polish of ``values`` by ``solver`` (stopped where it
+    joins one of ``avoid``), in a process forked for it (the compiled lanes on one thread):
+    its outcome, its stage times and the slots of the NLPs it built, in their order."""
+    before = list(solver._nlps)
+    solver.timings, solver.avoid = Timings(), avoid
+    with lanes.threads(1):
+        outcome = solver.solve_from(dict(values), secondary=secondary)
+    return outcome, solver.timings, [k for k in solver._nlps if k not in before]
+
+
+def _cancelled(ahead) -> None:
+    """End the process of a polish begun ahead (:meth:`_Polishing._further`), if any."""
+    if ahead is not None:
+        ahead[1].cancel()
+
+
 def workers_for(problem) -> int:
-    """The cores a solve uses (the screening's threads, the tolerance analysis's processes):
-    ``solver.workers``, or (0) every core, where the platform can fork."""
+    """The cores a solve uses (the screening's threads, the best basins polished at once, the
+    tolerance analysis's processes): ``solver.workers``, or (0) every core, where the
+    platform can fork."""
     import multiprocessing as mp
 
     from optdesign.limits import local_processes

@@ -118,12 +118,13 @@ def test_two_threads_never_share_an_nlp(fresh):
     assert theirs[0] is not mine and built.kept(problem, 3) is mine
 
 
-def test_the_two_best_basins_are_polished_in_turn_the_second_knowing_no_optimum(
+def test_the_two_best_basins_are_polished_at_once_the_second_knowing_no_optimum(
         fresh, monkeypatch, tmp_path):
-    """Two basins as if at once: both in the solving process, one after the other (no fork),
-    the second as a secondary polish on a solver of its own that knows no optimum the first
-    found (so it does not stop as it passes near it); the same answer as the NLPs kept from
-    a solve before."""
+    """Two basins as if at once: with two workers, the first in the solving process and the
+    second in a process forked beside it; with one, both here, one after the other. Either
+    way the second is a secondary polish on a solver of its own that knows no optimum the
+    first found (so it does not stop as it passes near it), and the answer is the same to the
+    bit, each polish's record too."""
     import os
 
     log = tmp_path / "polishes"
@@ -135,11 +136,110 @@ def test_the_two_best_basins_are_polished_in_turn_the_second_knowing_no_optimum(
         return solve_from(self, values, *args, **kwargs)
 
     monkeypatch.setattr(driver.PhaseSolver, "solve_from", logged)
+    results, here = {}, str(os.getpid())
+    for workers in (2, 1):
+        data = file_data(ROOT / "problems" / "sharkov2022_disc.yaml")
+        data.setdefault("solver", {})["workers"] = workers
+        log.unlink(missing_ok=True)
+        results[workers] = solve(problem_from_dict(data))
+        polishes = sorted((line.split() for line in log.read_text().splitlines()),
+                          key=lambda p: p[1])         # the first polish, then the second
+        assert results[workers].per_phase[0].screening["polished"] == 2
+        assert [p[1:] for p in polishes] == [["False", "0"], ["True", "0"]]
+        first, second = polishes
+        assert first[0] == here and (second[0] != here) == (workers == 2)
+    assert answer(results[2]) == answer(results[1])
+    records = {w: [(s.ipopt_status, s.iterations, s.delta, s.start) for s in r.per_phase[0].starts]
+               for w, r in results.items()}
+    assert records[2] == records[1]
+    assert results[2].timings_s["beside"] > 0 and results[1].timings_s["beside"] == 0
+
+
+def test_a_polish_that_fails_here_ends_the_one_beside(fresh, monkeypatch):
+    """The first basin's polish raises (a Ctrl-C, an error): the second's process, forked
+    beside it, is ended, not left to compute on (and then to wait on its pipe)."""
+    import multiprocessing
+
+    def interrupted(self, values, ver=None):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(driver._Polishing, "polish", interrupted)
     data = file_data(ROOT / "problems" / "sharkov2022_disc.yaml")
     data.setdefault("solver", {})["workers"] = 2
-    disc = problem_from_dict(data)
-    result = solve(disc)
-    polishes = [line.split() for line in log.read_text().splitlines()]
-    assert result.per_phase[0].screening["polished"] == 2
-    assert polishes == [[str(os.getpid()), "False", "0"], [str(os.getpid()), "True", "0"]]
-    assert answer(solve(disc)) == answer(result)
+    forked = []
+    head_beside = driver._head_beside
+    monkeypatch.setattr(driver, "_head_beside",
+                        lambda *a: forked.extend(head_beside(*a)) or forked)
+    with pytest.raises(KeyboardInterrupt):
+        solve(problem_from_dict(data))
+    assert len(forked) == 1 and forked[0].child is None
+    assert multiprocessing.active_children() == []
+
+
+def _polishes_of(name: str, workers: int, log, monkeypatch) -> tuple:
+    """The solve of problem ``name`` with ``workers``, and its polishes as logged: (process
+    "here" or "beside", start, secondary, optima known) in the order they began."""
+    import os
+
+    data = file_data(ROOT / "problems" / f"{name}.yaml")
+    data.setdefault("solver", {})["workers"] = workers
+    log.unlink(missing_ok=True)
+    result = solve(problem_from_dict(data))
+    here = str(os.getpid())
+    lines = [line.split(" ", 3) for line in log.read_text().splitlines()]
+    return result, [("here" if pid == here else "beside", start, secondary, known)
+                    for pid, secondary, known, start in lines]
+
+
+@pytest.fixture
+def logged_polishes(monkeypatch, tmp_path):
+    import os
+
+    log = tmp_path / "polishes"
+    solve_from = driver.PhaseSolver.solve_from
+
+    def logged(self, values, *args, **kwargs):
+        with open(log, "a") as f:
+            f.write(f"{os.getpid()} {kwargs.get('secondary', False)} {len(self.avoid)} "
+                    f"{sorted(values.items())}\n")
+        return solve_from(self, values, *args, **kwargs)
+
+    monkeypatch.setattr(driver.PhaseSolver, "solve_from", logged)
+    return lambda name, workers: _polishes_of(name, workers, log, monkeypatch)
+
+
+def _records(result) -> list:
+    return [(s.ipopt_status, s.iterations, s.delta, s.start, s.note)
+            for p in result.per_phase for s in p.starts]
+
+
+def test_a_further_basin_polished_beside_is_the_one_polished_in_turn(fresh, logged_polishes):
+    """The housing problem polishes four basins: the best two at once, then the third here
+    with the fourth begun beside it, knowing the optimum the first found; the third finds no
+    new one, so the fourth's outcome is taken. Every record is the one-worker solve's, to
+    the bit, and the fourth basin was polished once, beside."""
+    two, polishes = logged_polishes("housing_disc", 2)
+    one, in_turn = logged_polishes("housing_disc", 1)
+    assert answer(two) == answer(one) and _records(two) == _records(one)
+    assert [p[0] for p in in_turn] == ["here"] * 4
+    # the processes log as they begin, in either order: matched to the turn's by the start
+    where = {p[1:]: p[0] for p in polishes}
+    assert len(where) == len(polishes) == 4
+    assert [where.get(p[1:]) for p in in_turn] == ["here", "beside", "here", "beside"]
+    assert two.timings_s["beside"] > 0
+
+
+def test_a_further_basin_begun_with_stale_knowledge_is_polished_again_here(
+        fresh, logged_polishes, monkeypatch):
+    """Where the polish here changes what the next one would know (here forced: every
+    check finds the knowledge changed), the polish begun beside is dropped and the next
+    basin polished here: the same records as in turn."""
+    import itertools
+
+    ticks = itertools.count()
+    monkeypatch.setattr(driver._Polishing, "_known", lambda self: next(ticks))
+    two, polishes = logged_polishes("housing_disc", 2)
+    one, in_turn = logged_polishes("housing_disc", 1)
+    assert answer(two) == answer(one) and _records(two) == _records(one)
+    # the first, then (the second beside) the third and the fourth here, in this order
+    assert [p[1:] for p in polishes if p[0] == "here"] == [in_turn[k][1:] for k in (0, 2, 3)]

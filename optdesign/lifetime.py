@@ -269,7 +269,7 @@ def beside(fn, *args) -> "Beside":
     try:
         ctx = mp.get_context("fork")
         receive, send = ctx.Pipe(duplex=False)
-        child = ctx.Process(target=_answer, args=(send, os.getpid(), fn, args))
+        child = ctx.Process(target=_answer, args=(send, receive, os.getpid(), fn, args))
         with signals_held():
             child.start()
     except (ValueError, OSError, AssertionError):  # no fork here, or a daemon's child
@@ -293,8 +293,10 @@ class Beside:
             kind, value = self.receive.recv()
         except (EOFError, OSError):
             kind, value = "lost", None
-        finally:
-            self._close()
+        except BaseException:               # a Ctrl-C while waiting: the child is ended
+            self.cancel()
+            raise
+        self._close()
         if kind == "error":
             raise value
         return value if kind == "value" else self.fn(*self.args)
@@ -317,7 +319,8 @@ def _cancelled(*_):
     raise RuntimeError("a value computed beside was asked for after its child ended")
 
 
-def _answer(send, parent_pid: int, fn, args) -> None:
+def _answer(send, receive, parent_pid: int, fn, args) -> None:
+    receive.close()         # the parent's end: a parent that stops reading breaks the pipe
     die_with_parent(parent_pid)
     try:
         send.send(("value", fn(*args)))

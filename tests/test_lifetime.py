@@ -142,3 +142,26 @@ def test_a_sigterm_the_caller_ignores_stays_ignored():
         assert signal.getsignal(signal.SIGTERM) == signal.SIG_IGN
     finally:
         signal.signal(signal.SIGTERM, kept)
+
+
+def _large_after(seconds: float):
+    import time
+
+    time.sleep(seconds)
+    return b"x" * (1 << 20)             # more than a pipe holds: the child blocks sending it
+
+
+def test_a_ctrl_c_while_waiting_ends_the_child():
+    """Interrupted while it waits for the value, the parent ends the child and raises: the
+    child, with more to send than the pipe holds, is not left blocked on it (nor the parent
+    waiting for it to end)."""
+    import multiprocessing
+    import threading
+    import time
+
+    pending = beside(_large_after, 0.5)
+    threading.Timer(0.2, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
+    t0 = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        pending()
+    assert time.perf_counter() - t0 < 5 and multiprocessing.active_children() == []

@@ -20,7 +20,8 @@ Per problem of the race (``benchmarks/solve_vs_peers.py``'s ``CASES``):
   (``timings_s``: the NLP's build, the screening, the IPOPT runs, the exact verification,
   each summed over the solve's processes, and of these the seconds spent in a process beside
   the solve's own at the same time (``beside``: the best basins polished at once); the rest
-  is the sensitivities, the accuracy record, the bookkeeping) and the IPOPT iterations
+  is the sensitivities, the accuracy record, the bookkeeping and the solving process's wait
+  for a polish beside it to end) and the IPOPT iterations
   of the winning run against all of the solve's;
 * **the same solve again**: one more call with that memory kept, as a notebook that solves
   the same file twice runs it (the exact checks of the designs the solve before checked are

@@ -141,6 +141,11 @@ class PhaseSolver:
                 return nlp
         return self.nlp_of(max(need, self.curves()))   # a slot per curve, more if need be
 
+    def held_slots(self) -> tuple[int, ...]:
+        """The slots of the NLPs this solver holds, in the order it came to hold them (a
+        polish takes the first with enough: :meth:`nlp`)."""
+        return tuple(self._nlps)
+
     def curves(self) -> int:
         """The count's speed curves (a rocker's stroke each): the NLP's least slots."""
         return self.count * len(STROKE_SIGNS[self.problem.stroke])
@@ -510,7 +515,8 @@ class _Polishing:
             raise
         for k, values in enumerate(others):
             if k < len(at_once):
-                self._record_beside(*at_once[k]())
+                outcome, timings, _ = at_once[k]()      # (its NLPs: its own solver's)
+                self._record_beside(outcome, timings)
             else:
                 outcome, timings = _polish_beside(self.problem, self.count, values,
                                                   self.solver.checks_in_parallel)
@@ -557,7 +563,7 @@ class _Polishing:
         """What a polish of this count starts from besides its start: the optima found (it
         stops where it joins one, and is secondary once there is one) and the NLPs its
         solver holds (it takes the first with enough slots)."""
-        return (tuple(id(o) for o in self.optima), tuple(self.solver._nlps))
+        return (tuple(id(o) for o in self.optima), self.solver.held_slots())
 
     def _polish_ahead(self, values: dict):
         """:meth:`polish` of ``values`` with what the solve knows now, begun in a process
@@ -638,39 +644,38 @@ def _polish_beside(problem, count: int, values: dict,
     """A further best basin's polish (``secondary``: with a budget) on a solver of its own,
     which knows no optimum found before (its NLPs the process's kept ones of exactly the
     slots it asks for, :mod:`optdesign.solver.built`); its outcome and stage times."""
+    solver = _of_its_own(problem, count, checks_in_parallel)
+    return solver.solve_from(dict(values), secondary=True), solver.timings
+
+
+def _of_its_own(problem, count: int, checks_in_parallel: bool) -> "PhaseSolver":
+    """A solver of the count that knows no optimum and holds no NLP yet."""
     solver = PhaseSolver(problem, count)
     solver.checks_in_parallel = checks_in_parallel
-    return solver.solve_from(dict(values), secondary=True), solver.timings
+    return solver
 
 
 def _head_beside(problem, count: int, starts: list[dict],
                  checks_in_parallel: bool = False) -> list:
     """:func:`_polish_beside` of each of ``starts``, each begun in a process forked now
-    (:func:`optdesign.lifetime.beside`): called, each waits for its outcome and stage
-    times (computed here if its process is lost). The same polish as in this process, on the
-    same memory: the outcome is the same to the bit. The compiled lanes of each run on one
-    thread (the cores are taken)."""
+    (:func:`optdesign.lifetime.beside`, :func:`_polish_here`): called, each waits for its
+    outcome and stage times (computed here if its process is lost). The same polish as in
+    this process, on the same memory: the outcome is the same to the bit."""
     from optdesign.lifetime import beside
 
-    return [beside(_polish_alone, problem, count, values, checks_in_parallel)
-            for values in starts]
-
-
-def _polish_alone(problem, count: int, values: dict, checks_in_parallel: bool):
-    """:func:`_polish_beside` with the compiled lanes on one thread."""
-    with lanes.threads(1):
-        return _polish_beside(problem, count, values, checks_in_parallel)
+    return [beside(_polish_here, _of_its_own(problem, count, checks_in_parallel), values, [],
+                   True) for values in starts]
 
 
 def _polish_here(solver: "PhaseSolver", values: dict, avoid: list[dict], secondary: bool):
-    """:meth:`_Polishing.polish`'s own polish of ``values`` by ``solver`` (stopped where it
-    joins one of ``avoid``), in a process forked for it (the compiled lanes on one thread):
-    its outcome, its stage times and the slots of the NLPs it built, in their order."""
-    before = list(solver._nlps)
+    """``solver``'s polish of ``values`` (stopped where it joins one of ``avoid``), in a
+    process forked for it, the compiled lanes on one thread (the cores are taken): its
+    outcome, its stage times and the slots of the NLPs it came to hold, in their order."""
+    before = solver.held_slots()
     solver.timings, solver.avoid = Timings(), avoid
     with lanes.threads(1):
         outcome = solver.solve_from(dict(values), secondary=secondary)
-    return outcome, solver.timings, [k for k in solver._nlps if k not in before]
+    return outcome, solver.timings, [k for k in solver.held_slots() if k not in before]
 
 
 def _cancelled(ahead) -> None:

@@ -119,40 +119,22 @@ def test_two_threads_never_share_an_nlp(fresh):
 
 
 def test_the_two_best_basins_are_polished_at_once_the_second_knowing_no_optimum(
-        fresh, monkeypatch, tmp_path):
+        fresh, logged_polishes):
     """Two basins as if at once: with two workers, the first in the solving process and the
     second in a process forked beside it; with one, both here, one after the other. Either
     way the second is a secondary polish on a solver of its own that knows no optimum the
     first found (so it does not stop as it passes near it), and the answer is the same to the
     bit, each polish's record too."""
-    import os
-
-    log = tmp_path / "polishes"
-    solve_from = driver.PhaseSolver.solve_from
-
-    def logged(self, values, *args, **kwargs):
-        with open(log, "a") as f:
-            f.write(f"{os.getpid()} {kwargs.get('secondary', False)} {len(self.avoid)}\n")
-        return solve_from(self, values, *args, **kwargs)
-
-    monkeypatch.setattr(driver.PhaseSolver, "solve_from", logged)
-    results, here = {}, str(os.getpid())
-    for workers in (2, 1):
-        data = file_data(ROOT / "problems" / "sharkov2022_disc.yaml")
-        data.setdefault("solver", {})["workers"] = workers
-        log.unlink(missing_ok=True)
-        results[workers] = solve(problem_from_dict(data))
-        polishes = sorted((line.split() for line in log.read_text().splitlines()),
-                          key=lambda p: p[1])         # the first polish, then the second
-        assert results[workers].per_phase[0].screening["polished"] == 2
-        assert [p[1:] for p in polishes] == [["False", "0"], ["True", "0"]]
-        first, second = polishes
-        assert first[0] == here and (second[0] != here) == (workers == 2)
-    assert answer(results[2]) == answer(results[1])
-    records = {w: [(s.ipopt_status, s.iterations, s.delta, s.start) for s in r.per_phase[0].starts]
-               for w, r in results.items()}
-    assert records[2] == records[1]
-    assert results[2].timings_s["beside"] > 0 and results[1].timings_s["beside"] == 0
+    two, polishes = logged_polishes("sharkov2022_disc", 2)
+    one, in_turn = logged_polishes("sharkov2022_disc", 1)
+    assert [r.per_phase[0].screening["polished"] for r in (two, one)] == [2, 2]
+    # (process, secondary, optima known) of the first polish, then of the second
+    assert [(p[0], p[2], p[3]) for p in in_turn] == [("here", "False", "0"),
+                                                     ("here", "True", "0")]
+    where = {p[1:]: p[0] for p in polishes}         # logged as they begin, in either order
+    assert len(where) == 2 and [where.get(p[1:]) for p in in_turn] == ["here", "beside"]
+    assert answer(two) == answer(one) and _records(two) == _records(one)
+    assert two.timings_s["beside"] > 0 and one.timings_s["beside"] == 0
 
 
 def test_a_polish_that_fails_here_ends_the_one_beside(fresh, monkeypatch):

@@ -545,7 +545,7 @@ class _Polishing:
                     outcome = self._record_beside(*ahead[1]())
                     ahead = None
                 else:
-                    ahead = _cancelled(ahead)
+                    ahead = _dropped(ahead)
                     if self.workers > 1 and i + 1 < len(starts) and \
                             self.polished + 1 < s.starts:
                         ahead = (i + 1, self._polish_ahead(starts[i + 1]), self._known())
@@ -557,7 +557,7 @@ class _Polishing:
                         verdicts.count(outcome.record.note) >= s.agree + 1:
                     return
         finally:
-            _cancelled(ahead)
+            _dropped(ahead)
 
     def _known(self) -> tuple:
         """What a polish of this count starts from besides its start: the optima found (it
@@ -678,7 +678,7 @@ def _polish_here(solver: "PhaseSolver", values: dict, avoid: list[dict], seconda
     return outcome, solver.timings, [k for k in solver.held_slots() if k not in before]
 
 
-def _cancelled(ahead) -> None:
+def _dropped(ahead) -> None:
     """End the process of a polish begun ahead (:meth:`_Polishing._further`), if any."""
     if ahead is not None:
         ahead[1].cancel()

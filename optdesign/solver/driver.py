@@ -516,12 +516,10 @@ class _Polishing:
         for k, values in enumerate(others):
             if k < len(at_once):
                 outcome, timings, _ = at_once[k]()      # (its NLPs: its own solver's)
-                self._record_beside(outcome, timings)
             else:
                 outcome, timings = _polish_beside(self.problem, self.count, values,
                                                   self.solver.checks_in_parallel)
-                self.record(outcome)
-                self.solver.timings.add(timings)
+            self._record_made(outcome, timings, beside=k < len(at_once))
 
     def _further(self, starts: list[dict]) -> None:
         """The basins after the best ones, in the screening's order, while they can bring a
@@ -542,7 +540,7 @@ class _Polishing:
                         self.polished - max(self.improved_at, s.basins) >= s.basins):
                     return       # agreed, or `basins` more polishes found nothing better
                 if ahead is not None and ahead[0] == i and ahead[2] == self._known():
-                    outcome = self._record_beside(*ahead[1]())
+                    outcome = self._record_made(*ahead[1](), beside=True)
                     ahead = None
                 else:
                     ahead = _dropped(ahead)
@@ -573,15 +571,17 @@ class _Polishing:
         return beside(_polish_here, self.solver, values, [o.values for o in self.optima],
                       self.converged())
 
-    def _record_beside(self, outcome: Outcome, timings: Timings, built_slots=()) -> Outcome:
-        """The outcome of a polish made in a process beside this one, recorded as this
-        process's own (its stage times counted as spent beside); the NLPs it built are
-        built here too, in its order, so that this solver holds what it would hold had the
-        polish been made here."""
+    def _record_made(self, outcome: Outcome, timings: Timings, built_slots=(),
+                     beside: bool = False) -> Outcome:
+        """The outcome of a polish made by another solver or (``beside``) in a process
+        beside this one, recorded as this solver's own with its stage times (those made
+        beside counted as such); the NLPs it came to hold are built here too, in its order,
+        so that this solver holds what it would hold had the polish been made by it."""
         for slots in built_slots:
             self.solver.nlp_of(slots)
         self.solver.timings.add(timings)
-        self.solver.timings.beside += timings.total()
+        if beside:
+            self.solver.timings.beside += timings.total()
         return self.record(outcome)
 
     def converged(self) -> bool:

@@ -13,7 +13,7 @@ from optdesign.evaluation.regulation import curve_over_range, worst_over_range
 from optdesign.evaluation.ripples import ripple_label, ripples_of_quantities
 from optdesign.outputs.tabular import Tabular
 from optdesign.outputs.units import design_units, gear_ratio_text, input_speed_text, stamped
-from optdesign.quantities import design_quantities, get_quantity
+from optdesign.quantities import design_quantities, unit_text
 from optdesign.quantities.criteria import Measured, searched_quantities
 from optdesign.solver.verify import checks
 
@@ -285,8 +285,7 @@ def format_analysis(result: AnalysisResult, name: str = "") -> str:
         lines.append(f"quantities (worst over {over}; the ratio at e = 1):")
         interval = result.quantities.get("interval", {})
         for name, value in result.quantities["values"].items():
-            q = get_quantity(name)
-            unit = "" if q.unit == "-" else f" {q.unit}"
+            unit = unit_text(name)
             where = f"  (interval's worst at e = {interval[name]['eccentricity']:.4f})" \
                 if name in interval else ""
             lines.append(f"  {name:<20} {value:12.6g}{unit}{where}")

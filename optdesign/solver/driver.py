@@ -92,8 +92,8 @@ class Timings:
             setattr(self, k, getattr(self, k) + v)
 
     def total(self) -> float:
-        """The stages' seconds, summed."""
-        return self.build + self.screening + self.ipopt + self.verification
+        """The stages' seconds, summed (``beside`` is a part of them, not a stage)."""
+        return sum(v for k, v in self.to_dict().items() if k != "beside")
 
     def to_dict(self) -> dict:
         return asdict(self)

@@ -87,7 +87,7 @@ def floor(problem, phase, repeats: int) -> dict:
     """One IPOPT run from ``phase``'s winning start on the NLP built beforehand, and one
     exact check of where it ends: seconds of each (medians of ``repeats``), its
     iterations."""
-    from optdesign.solver.driver import AS_IT_IS, PhaseSolver
+    from optdesign.solver.phase_solver import AS_IT_IS, PhaseSolver
 
     count, start, win = winning_start(problem, phase)
     solver = PhaseSolver(problem, count)

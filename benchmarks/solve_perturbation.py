@@ -57,7 +57,7 @@ MOVED = 1e-6
 def floor_run(problem, phase):
     """(the NLP, its IPOPT arguments from ``phase``'s winning start, its count): the run
     ``benchmarks/solve_floor.py`` times."""
-    from optdesign.solver.driver import PhaseSolver
+    from optdesign.solver.phase_solver import PhaseSolver
     from solve_floor import winning_start
 
     count, start, _ = winning_start(problem, phase)
@@ -130,7 +130,7 @@ def answer_rows(label: str, draws, path: Path, prepare=None) -> None:
     the counts (0: the answer is a design where a polish stopped, or a screened one)."""
     import oracle
     from optdesign.solver import solve, verify
-    from optdesign.solver.driver import SUCCESS
+    from optdesign.solver.phase_solver import SUCCESS
 
     rows = json.loads(path.read_text()) if path.exists() else []
     for draw in draws[len(rows):]:

@@ -4,7 +4,7 @@ With ``regulation: {eccentricity: {lower, upper}}`` a bound on a quantity, or a 
 objective, reads its worst over the whole interval: the exact search
 (optdesign.evaluation.regulation) agrees with a dense scan of e, a solve holds a bound over
 every e of the interval, and an interior worst is held in an eccentricity slot of the NLP as
-the ripple's is (optdesign.solver.driver.next_held). In a robust solve a bound holds for every
+the ripple's is (optdesign.solver.phase_solver.next_held). In a robust solve a bound holds for every
 part of the tolerance box: its worst part is a scenario of the NLP (optdesign.solver.robust).
 """
 import json
@@ -18,7 +18,7 @@ from optdesign.problem.loader import load_problem, problem_from_dict
 from optdesign.quantities import get_quantity
 from optdesign.quantities.criteria import interval_quantities, searched_quantities
 from optdesign.solver import verify
-from optdesign.solver.driver import PhaseSolver
+from optdesign.solver.phase_solver import PhaseSolver
 from tests.conftest import ROOT, file_data, run_main
 
 HOUSING_FILE = ROOT / "problems" / "housing_disc.yaml"

@@ -33,7 +33,7 @@ from optdesign.figures.design import place_labels, pyplot
 from optdesign.lifetime import interrupts_kept
 from optdesign.quantities.criteria import objective_of
 from optdesign.solver import solve, verify
-from optdesign.solver.driver import PhaseSolver
+from optdesign.solver.phase_solver import PhaseSolver
 from optdesign.solver.verify import start_guess
 
 REFERENCE_GRID = 16384

@@ -58,7 +58,7 @@ def recipes_of(problem) -> list[tuple]:
     from dataclasses import replace
 
     from optdesign.solver import compiled, verify
-    from optdesign.solver.driver import PhaseSolver
+    from optdesign.solver.phase_solver import PhaseSolver
     from optdesign.solver.nlp import is_robust
 
     problems = [problem]

@@ -2,7 +2,7 @@
 
 A solve (:func:`optdesign.solver.driver.solve`) screens the whole box and polishes its best
 basins; the explorer asks a smaller question, "where does the optimum go from here?", and
-answers it with one polish (:meth:`optdesign.solver.driver.PhaseSolver.solve_from`) from the
+answers it with one polish (:meth:`optdesign.solver.phase_solver.PhaseSolver.solve_from`) from the
 current design, refined until the exact evaluator agrees with the NLP, as every polish is.
 
 The NLP of a phase count is built once and kept: the constraints' bounds are read from the
@@ -49,7 +49,7 @@ def structure(problem) -> tuple:
 
 
 class Reoptimiser:
-    """Keeps one :class:`~optdesign.solver.driver.PhaseSolver` (with its built NLPs and
+    """Keeps one :class:`~optdesign.solver.phase_solver.PhaseSolver` (with its built NLPs and
     IPOPT functions) per phase count and NLP structure; one solve at a time."""
 
     def __init__(self):
@@ -57,7 +57,7 @@ class Reoptimiser:
         self._lock = threading.Lock()
 
     def _solver(self, problem, count: int):
-        from optdesign.solver.driver import PhaseSolver
+        from optdesign.solver.phase_solver import PhaseSolver
 
         key = (count, structure(problem))
         solver = self._solvers.get(key)

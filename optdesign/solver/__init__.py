@@ -16,7 +16,7 @@ __all__ = ["PhaseResult", "PhaseSolver", "SolveResult", "StartRecord", "Verifica
            "solve", "solve_phase", "verify"]
 
 #: the names read from a submodule when first asked for
-_LAZY = {"PhaseSolver": "optdesign.solver.driver", "solve": "optdesign.solver.entry",
+_LAZY = {"PhaseSolver": "optdesign.solver.phase_solver", "solve": "optdesign.solver.entry",
          "solve_phase": "optdesign.solver.driver", "PhaseResult": "optdesign.solver.result",
          "SolveResult": "optdesign.solver.result", "StartRecord": "optdesign.solver.result"}
 

@@ -298,9 +298,9 @@ def test_a_dominated_point_of_a_real_sweep_is_re_solved_and_none_is_left(tmp_pat
     one row."""
     import yaml
 
-    from optdesign.solver import driver
+    from optdesign.solver import polishing
 
-    monkeypatch.setattr(driver._Polishing, "apart", lambda self: False)
+    monkeypatch.setattr(polishing.Polishing, "apart", lambda self: False)
 
     from tests.conftest import ROOT
 

@@ -1,5 +1,5 @@
-"""A phase count whose best basins end apart is polished further (optdesign/solver/driver.py,
-``_Polishing.apart``): the disc kept, reverse stroke, six phases. The screening ranks a basin
+"""A phase count whose best basins end apart is polished further (optdesign/solver/polishing.py,
+``Polishing.apart``): the disc kept, reverse stroke, six phases. The screening ranks a basin
 by its seed's sampled δ, and the basin of the optimum (l3 ≈ 27 mm on the transmission-angle
 bound, δ = 0.14165) ranks fourth; the two best basins give δ = 0.14634 and a polish that does
 not converge in the secondary budget. About 4 s."""
@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from optdesign.problem.loader import load_problem
-from optdesign.solver import driver, solve, verify
+from optdesign.solver import phase_solver, polishing, solve, verify
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -36,7 +36,7 @@ def test_the_best_basin_ranked_fourth_is_polished(six_phases):
 
 def test_without_the_rule_the_solve_stops_in_the_worse_basin(six_phases, monkeypatch):
     """The case exercises the rule: polishing only the two best-ranked basins ends worse."""
-    monkeypatch.setattr(driver._Polishing, "apart", lambda self: False)
+    monkeypatch.setattr(polishing.Polishing, "apart", lambda self: False)
     result = solve(six_phases)
     assert result.delta > 0.1416 + 1e-3
 
@@ -55,4 +55,4 @@ def test_on_one_worker_the_best_basins_are_polished_as_on_two(six_phases):
         polishes[workers] = [(s.ipopt_status, s.iterations, s.delta)
                              for s in result.best_phase().starts]
     assert polishes[1] == polishes[2]
-    assert polishes[1][1][0] == driver.EXHAUSTED
+    assert polishes[1][1][0] == phase_solver.EXHAUSTED

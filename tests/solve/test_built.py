@@ -6,7 +6,7 @@ import pickle
 import pytest
 
 from optdesign.problem.loader import load_problem, problem_from_dict
-from optdesign.solver import built, driver, solve
+from optdesign.solver import built, phase_solver, polishing, solve
 from optdesign.solver.nlp import PhaseNLP
 from tests.conftest import ROOT, file_data
 
@@ -38,7 +38,7 @@ def test_a_second_solve_builds_nothing_and_answers_the_same(fresh, monkeypatch, 
     def builds() -> list[int]:
         return [int(x) for x in log.read_text().split()] if log.exists() else []
 
-    monkeypatch.setattr(driver, "PhaseNLP", counted)
+    monkeypatch.setattr(phase_solver, "PhaseNLP", counted)
     disc = load_problem(ROOT / "problems" / "sharkov2022_disc.yaml")
     first = solve(disc)
     assert [p.screening["polished"] for p in first.per_phase] == [2]
@@ -145,12 +145,12 @@ def test_a_polish_that_fails_here_ends_the_one_beside(fresh, monkeypatch):
     def interrupted(self, values, ver=None):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(driver._Polishing, "polish", interrupted)
+    monkeypatch.setattr(polishing.Polishing, "polish", interrupted)
     data = file_data(ROOT / "problems" / "sharkov2022_disc.yaml")
     data.setdefault("solver", {})["workers"] = 2
     forked = []
-    head_beside = driver._head_beside
-    monkeypatch.setattr(driver, "_head_beside",
+    head_beside = polishing._head_beside
+    monkeypatch.setattr(polishing, "_head_beside",
                         lambda *a: forked.extend(head_beside(*a)) or forked)
     with pytest.raises(KeyboardInterrupt):
         solve(problem_from_dict(data))
@@ -178,7 +178,7 @@ def logged_polishes(monkeypatch, tmp_path):
     import os
 
     log = tmp_path / "polishes"
-    solve_from = driver.PhaseSolver.solve_from
+    solve_from = phase_solver.PhaseSolver.solve_from
 
     def logged(self, values, *args, **kwargs):
         with open(log, "a") as f:
@@ -186,7 +186,7 @@ def logged_polishes(monkeypatch, tmp_path):
                     f"{sorted(values.items())}\n")
         return solve_from(self, values, *args, **kwargs)
 
-    monkeypatch.setattr(driver.PhaseSolver, "solve_from", logged)
+    monkeypatch.setattr(phase_solver.PhaseSolver, "solve_from", logged)
     return lambda name, workers: _polishes_of(name, workers, log, monkeypatch)
 
 
@@ -219,7 +219,7 @@ def test_a_further_basin_begun_with_stale_knowledge_is_polished_again_here(
     import itertools
 
     ticks = itertools.count()
-    monkeypatch.setattr(driver._Polishing, "_known", lambda self: next(ticks))
+    monkeypatch.setattr(polishing.Polishing, "_known", lambda self: next(ticks))
     two, polishes = logged_polishes("housing_disc", 2)
     one, in_turn = logged_polishes("housing_disc", 1)
     assert answer(two) == answer(one) and _records(two) == _records(one)

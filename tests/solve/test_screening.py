@@ -7,7 +7,7 @@ import pytest
 
 from optdesign.problem.loader import Variable, load_problem
 from optdesign.solver import solve
-from optdesign.solver.driver import PhaseSolver
+from optdesign.solver.phase_solver import PhaseSolver
 from optdesign.solver.screening import Candidate, _basins, _crossings, screen
 from tests.conftest import ROOT
 

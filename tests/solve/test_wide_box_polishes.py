@@ -1,5 +1,5 @@
 """Polishes on a box of decades: where no polish of a count converged, the polishes the
-secondary budget stopped are run again to their end (``_Polishing.rescue``) and a basin
+secondary budget stopped are run again to their end (``Polishing.rescue``) and a basin
 beside a known design is polished in full; in a box of decades every IPOPT run has
 ``WIDE_ITERATIONS`` times ``solver.max_iter`` iterations (``iterations_of``) and an L-BFGS
 verdict of local infeasibility is retried with the exact Hessian.
@@ -17,7 +17,8 @@ from types import SimpleNamespace
 import pytest
 
 from optdesign.problem.loader import load_problem
-from optdesign.solver.driver import EXHAUSTED, Outcome, PhaseSolver, _Polishing, _Run
+from optdesign.solver.phase_solver import EXHAUSTED, Outcome, PhaseSolver, _Run
+from optdesign.solver.polishing import Polishing
 from optdesign.solver.result import PhaseResult, StartRecord
 from optdesign.solver.screening import WIDE_ITERATIONS, iterations_of
 
@@ -60,7 +61,7 @@ def test_budget_stopped_polishes_run_to_their_end_where_none_converged():
         return _outcome(values, "Maximum_Iterations_Exceeded", False, 0.5, values)
 
     solver = _Scripted(script)
-    work = _Polishing(problem, 6, solver, PhaseResult(6, "failed"))
+    work = Polishing(problem, 6, solver, PhaseResult(6, "failed"))
     for values, secondary in zip(starts, (False, True, True)):
         work.record(solver.solve_from(values, secondary=secondary))
     assert not work.converged()
@@ -77,7 +78,7 @@ def test_the_rescue_keeps_to_the_count_s_polishes():
     starts = _starts(problem, 6, 3)
     solver = _Scripted(lambda v, s: _outcome(v, EXHAUSTED if s else "Solve_Succeeded",
                                              not s, 0.1, v))
-    work = _Polishing(problem, 6, solver, PhaseResult(6, "failed"))
+    work = Polishing(problem, 6, solver, PhaseResult(6, "failed"))
     for values in starts:
         work.record(_outcome(values, EXHAUSTED, False, 0.3, values))
     work.rescue()                   # three polishes made: solver.starts
@@ -88,7 +89,7 @@ def test_no_rescue_beside_a_converged_optimum():
     problem = load_problem(DISC)
     starts = _starts(problem, 6, 2)
     solver = _Scripted(lambda v, s: _outcome(v, "Solve_Succeeded", True, 0.1, v))
-    work = _Polishing(problem, 6, solver, PhaseResult(6, "failed"))
+    work = Polishing(problem, 6, solver, PhaseResult(6, "failed"))
     work.record(_outcome(starts[0], "Solve_Succeeded", True, 0.1, starts[0]))
     work.record(_outcome(starts[1], EXHAUSTED, False, 0.3, starts[1]))
     work.rescue()
@@ -143,7 +144,7 @@ def test_a_basin_beside_a_known_design_is_polished_in_full():
     problem = load_problem(DISC)
     starts = _starts(problem, 6, 3)
     solver = _Scripted(lambda v, s: _outcome(v, "Solve_Succeeded", True, 0.2, v))
-    work = _Polishing(problem, 6, solver, PhaseResult(6, "failed"))
+    work = Polishing(problem, 6, solver, PhaseResult(6, "failed"))
     work.consider(_outcome(starts[0], "Known_Design_As_It_Is", True, 0.3, starts[0]))
     assert work.best is not None and not work.converged()
     work.polish(starts[1])

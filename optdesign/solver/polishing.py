@@ -1,0 +1,314 @@
+"""Which starts of one phase count are polished, and in what order: the best basins, then
+the next while they can bring a better optimum (:meth:`Polishing.basins`).
+
+The best basins are polished as if at once, so the answer does not depend on the worker
+count; with two cores the first is polished here and the next in a process forked beside it,
+and each later basin is begun beside the one before it (:mod:`optdesign.lifetime`). Each
+polish is a :class:`~optdesign.solver.phase_solver.PhaseSolver`'s; the distinct optima it
+finds, the best of them and every polish's record are this module's.
+"""
+from __future__ import annotations
+
+from contextlib import nullcontext
+
+from optdesign.numerics import lanes
+from optdesign.solver.phase_solver import (AS_IT_IS, EXHAUSTED, JOINED, STALLED, SUCCESS,
+                                           Outcome, PhaseSolver, Timings)
+from optdesign.solver.result import PhaseResult, StartRecord
+from optdesign.solver.screening import line_seeds
+from optdesign.solver.verify import Verification
+
+#: two polished optima are one basin when their designs differ by less than this (relative
+#: to the box) and their objectives by less than SAME_KEY_REL
+SAME_DESIGN = 1e-4
+SAME_KEY_REL = 1e-6
+
+class Polishing:
+    """The polishes of one phase count: their records, the distinct optima, the best."""
+
+    def __init__(self, problem, count: int, solver: PhaseSolver, result: PhaseResult,
+                 workers: int = 1):
+        self.problem, self.count, self.solver, self.result = problem, count, solver, result
+        self.workers = workers
+        self.best: Outcome | None = None
+        self.optima: list[Outcome] = []
+        #: every polish's outcome, feasible or not (the verdict must agree with each)
+        self.outcomes: list[Outcome] = []
+        self.polished = 0
+        self.improved_at = 0          # the polish that last improved on the best
+
+    def polish(self, values: dict, ver: Verification | None = None) -> Outcome:
+        """IPOPT from ``values`` (its start's check ``ver``, when done already), recorded: a
+        secondary polish (with a budget, stopped where it stalls or joins) beside a converged
+        optimum; without one, a polish of its own to the end. A known design (where a polish
+        that did not converge stopped, the file's own) is a candidate, not an optimum: beside
+        it a basin is polished in full (a box of decades, where the first polish runs out of
+        iterations and every later one stalled under the budget)."""
+        self.solver.avoid = [o.values for o in self.optima]
+        try:
+            outcome = self.solver.solve_from(dict(values), ver=ver,
+                                             secondary=self.converged())
+        finally:
+            self.solver.avoid = []
+        return self.record(outcome)
+
+    def consider(self, outcome: Outcome) -> None:
+        """A known design verified as it is (no polish): the best when it meets every
+        constraint and beats the polished optima; never a basin a polish stops at."""
+        if outcome.record.feasible and (self.best is None or
+                                        outcome.verification.key < self.best.verification.key):
+            self.result.starts.append(outcome.record)
+            self.best = outcome
+
+    def record(self, outcome: Outcome) -> Outcome:
+        self.polished += 1
+        self.outcomes.append(outcome)
+        self.result.starts.append(outcome.record)
+        self.result.iterations += outcome.record.iterations
+        if _verified_end(outcome):
+            # IPOPT stopped short (out of iterations, a restoration failure) at a design the
+            # exact check accepts: a design the solve has seen, so a candidate as it is
+            self.consider(_as_found(outcome))
+        if outcome.record.feasible:
+            if not any(_same_optimum(self.problem, outcome, o) for o in self.optima):
+                self.optima.append(outcome)
+            if self.best is None or outcome.verification.key < self.best.verification.key:
+                if self.best is None or not _same_optimum(self.problem, outcome, self.best):
+                    self.improved_at = self.polished
+                self.best = outcome
+        return outcome
+
+    def apart(self) -> bool:
+        """Whether the polishes so far ended apart: more than one optimum, or a polish that
+        reached none (stalled, out of budget, infeasible). A count whose best basins lead to
+        different places is multimodal, and its next basins are worth polishing. A polish
+        stopped as it came near a known optimum (:data:`JOINED`) counts as one that reached
+        none: it may only pass by (``tests/solve/test_basins_apart.py``: the second basin,
+        polished knowing the first's optimum)."""
+        return len(self.optima) > 1 or any(
+            not r.feasible or r.ipopt_status not in SUCCESS + (JOINED,)
+            for r in self.result.starts)
+
+    def basins(self, seeds) -> None:
+        """Polish the best basins' seeds: `basins` of them once one is feasible; with none
+        feasible, on until `agree + 1` IPOPT verdicts of local infeasibility on one constraint
+        (or `starts` polishes). Where the polishes end :meth:`apart`, on through the next
+        basins until `basins` polishes in a row bring no better optimum (the screening's rank
+        of a basin is the sampled value of its seed, not of its bottom, so the best basin may
+        rank third or fourth).
+
+        The best `basins` are polished as if at once, each after the first on a solver of its
+        own that knows no optimum the others found (:func:`_polish_beside`): so a basin that
+        would join the first's optimum only in passing runs to its end, and the answer does
+        not depend on the worker count. With more than one worker they are polished at once:
+        the first here, the next `workers - 1` each in a process forked beside it
+        (:func:`_head_beside`), the rest here after it; each outcome is recorded in the
+        screening's order, as if polished in turn. The later basins are polished in turn,
+        each stopped once it joins an optimum found already; with more than one worker, the
+        next one is begun beside each and kept where the turn would have polished it with the
+        same knowledge (:meth:`_further`). Either way each polish is the one the single
+        process makes, to the bit: only the time differs (``tests/solve/test_built.py``)."""
+        s = self.problem.solver
+        seeds = list(seeds)
+        head = min(s.basins, s.starts, len(seeds))
+        if head > 1:
+            self._head([seed.values for seed in seeds[:head]])
+            seeds = seeds[head:]
+        self._further([seed.values for seed in seeds])
+
+    def _head(self, starts: list[dict]) -> None:
+        """The best basins' polishes as if at once (:meth:`basins`): the first here, the
+        next ``workers - 1`` in processes forked beside it, the rest here after it."""
+        others = starts[1:]
+        if self.workers > 1:
+            self.solver.prepare()           # built once, before the processes part
+        at_once = _head_beside(self.problem, self.count, others[:self.workers - 1],
+                               self.solver.checks_in_parallel)
+        try:
+            with lanes.threads(1) if at_once else nullcontext():
+                self.polish(starts[0])
+        except BaseException:
+            for pending in at_once:
+                pending.cancel()
+            raise
+        for k, values in enumerate(others):
+            if k < len(at_once):
+                outcome, timings, _ = at_once[k]()      # (its NLPs: its own solver's)
+            else:
+                outcome, timings = _polish_beside(self.problem, self.count, values,
+                                                  self.solver.checks_in_parallel)
+            self._record_made(outcome, timings, beside=k < len(at_once))
+
+    def _further(self, starts: list[dict]) -> None:
+        """The basins after the best ones, in the screening's order, while they can bring a
+        better optimum (:meth:`basins`). With more than one worker, each polish here is
+        joined by the next one's, begun in a process forked beside it with what the solve
+        knows then (the optima found, the NLPs built): where this polish leaves that
+        unchanged and the next one is due, its outcome is the one this process would
+        have found (the same polish on the same memory), and is taken; else it is dropped
+        and the next one polished here."""
+        s = self.problem.solver
+        ahead = None                # (the start's index, its polish beside, what it knew)
+        try:
+            for i, values in enumerate(starts):
+                if self.polished >= s.starts:
+                    return
+                if self.best is not None and self.polished >= s.basins and (
+                        not self.apart() or
+                        self.polished - max(self.improved_at, s.basins) >= s.basins):
+                    return       # agreed, or `basins` more polishes found nothing better
+                if ahead is not None and ahead[0] == i and ahead[2] == self._known():
+                    outcome = self._record_made(*ahead[1](), beside=True)
+                    ahead = None
+                else:
+                    ahead = _dropped(ahead)
+                    if self.workers > 1 and i + 1 < len(starts) and \
+                            self.polished + 1 < s.starts:
+                        ahead = (i + 1, self._polish_ahead(starts[i + 1]), self._known())
+                    with lanes.threads(1) if ahead else nullcontext():
+                        outcome = self.polish(values)
+                verdicts = [r.note for r in self.result.starts
+                            if r.ipopt_status == "Infeasible_Problem_Detected"]
+                if self.best is None and outcome.record.note and \
+                        verdicts.count(outcome.record.note) >= s.agree + 1:
+                    return
+        finally:
+            _dropped(ahead)
+
+    def _known(self) -> tuple:
+        """What a polish of this count starts from besides its start: the optima found (it
+        stops where it joins one, and is secondary once there is one) and the NLPs its
+        solver holds (it takes the first with enough slots)."""
+        return (tuple(id(o) for o in self.optima), self.solver.held_slots())
+
+    def _polish_ahead(self, values: dict):
+        """:meth:`polish` of ``values`` with what the solve knows now, begun in a process
+        forked beside this one (:func:`optdesign.lifetime.beside`)."""
+        from optdesign.lifetime import beside
+
+        return beside(_polish_here, self.solver, values, [o.values for o in self.optima],
+                      self.converged())
+
+    def _record_made(self, outcome: Outcome, timings: Timings, built_slots=(),
+                     beside: bool = False) -> Outcome:
+        """The outcome of a polish made by another solver or (``beside``) in a process
+        beside this one, recorded as this solver's own with its stage times (those made
+        beside counted as such); the NLPs it came to hold are built here too, in its order,
+        so that this solver holds what it would hold had the polish been made by it."""
+        for slots in built_slots:
+            self.solver.nlp_of(slots)
+        self.solver.timings.add(timings)
+        if beside:
+            self.solver.timings.beside += timings.total()
+        return self.record(outcome)
+
+    def converged(self) -> bool:
+        """Whether a polish of the count converged to a design that meets every constraint
+        (an optimum: a record is feasible only where IPOPT succeeded and the check agrees)."""
+        return bool(self.optima)
+
+    def rescue(self) -> None:
+        """Where no polish converged, each polish the secondary budget stopped (on its way:
+        neither stalled nor joined to an optimum) is run again from its start to its end, in
+        the screening's order, until one converges (within ``solver.starts`` polishes). The
+        budget spares the time of a further basin beside an optimum found; with none found,
+        the stopped polishes are the count's best leads (on a box of decades a basin whose
+        polish needs 75 iterations is stopped at 50 while the first polish runs out of
+        iterations)."""
+        stopped = [o.record.start for o in self.outcomes
+                   if o.record.ipopt_status == EXHAUSTED]
+        for values in stopped:
+            if self.converged() or self.polished >= self.problem.solver.starts:
+                return
+            self.polish(values)
+
+    def lines(self) -> None:
+        """Line screening through the best optimum: a basin beside its face is polished while
+        it improves on the best (within the polish budget)."""
+        tried: list[dict] = []
+        while self.best is not None and self.polished < self.problem.solver.starts:
+            with self.solver.timings.stage("screening"), lanes.threads(self.workers):
+                beside = [c for c in line_seeds(self.problem, self.count, self.best.values)
+                          if not any(_close(self.problem, c.values, t) for t in tried)]
+            if not beside:
+                return
+            tried.append(beside[0].values)
+            before = self.best.verification.key
+            self.polish(beside[0].values)
+            if self.best.verification.key >= before - SAME_KEY_REL * max(1e-3, abs(before)):
+                return
+
+
+def _verified_end(outcome: Outcome) -> bool:
+    """Whether a polish that did not converge ended at a design of its own (not its start)
+    that the exact check found feasible."""
+    r = outcome.record
+    return (not r.feasible and r.ipopt_status not in SUCCESS + (JOINED, STALLED, EXHAUSTED,
+                                                                AS_IT_IS)
+            and bool(outcome.verification.feasible) and outcome.values != r.start)
+
+
+def _as_found(outcome: Outcome) -> Outcome:
+    """The end of an unconverged polish as a known design (:data:`AS_IT_IS`)."""
+    record = StartRecord(start=dict(outcome.values), ipopt_status=AS_IT_IS, iterations=0,
+                         time_s=0.0, feasible=True, delta=outcome.verification.delta,
+                         note=f"where a polish stopped ({outcome.record.ipopt_status}), "
+                              f"verified as it is")
+    return Outcome(record, outcome.verification, dict(outcome.values), None)
+
+
+def _polish_beside(problem, count: int, values: dict,
+                   checks_in_parallel: bool = False) -> tuple[Outcome, Timings]:
+    """A further best basin's polish (``secondary``: with a budget) on a solver of its own,
+    which knows no optimum found before (its NLPs the process's kept ones of exactly the
+    slots it asks for, :mod:`optdesign.solver.built`); its outcome and stage times."""
+    solver = _of_its_own(problem, count, checks_in_parallel)
+    return solver.solve_from(dict(values), secondary=True), solver.timings
+
+
+def _of_its_own(problem, count: int, checks_in_parallel: bool) -> "PhaseSolver":
+    """A solver of the count that knows no optimum and holds no NLP yet."""
+    solver = PhaseSolver(problem, count)
+    solver.checks_in_parallel = checks_in_parallel
+    return solver
+
+
+def _head_beside(problem, count: int, starts: list[dict],
+                 checks_in_parallel: bool = False) -> list:
+    """:func:`_polish_beside` of each of ``starts``, each begun in a process forked now
+    (:func:`optdesign.lifetime.beside`, :func:`_polish_here`): called, each waits for its
+    outcome and stage times (computed here if its process is lost). The same polish as in
+    this process, on the same memory: the outcome is the same to the bit."""
+    from optdesign.lifetime import beside
+
+    return [beside(_polish_here, _of_its_own(problem, count, checks_in_parallel), values, [],
+                   True) for values in starts]
+
+
+def _polish_here(solver: "PhaseSolver", values: dict, avoid: list[dict], secondary: bool):
+    """``solver``'s polish of ``values`` (stopped where it joins one of ``avoid``), in a
+    process forked for it, the compiled lanes on one thread (the cores are taken): its
+    outcome, its stage times and the slots of the NLPs it came to hold, in their order."""
+    before = solver.held_slots()
+    solver.timings, solver.avoid = Timings(), avoid
+    with lanes.threads(1):
+        outcome = solver.solve_from(dict(values), secondary=secondary)
+    return outcome, solver.timings, [k for k in solver.held_slots() if k not in before]
+
+
+def _dropped(ahead) -> None:
+    """End the process of a polish begun ahead (:meth:`Polishing._further`), if any."""
+    if ahead is not None:
+        ahead[1].cancel()
+
+
+def _close(problem, a: dict, b: dict, share: float = 1e-3) -> bool:
+    """Every free length of ``a`` and ``b`` within ``share`` of its box."""
+    return all(abs(a[k] - b[k]) <= share * (problem.design[k].upper - problem.design[k].lower)
+               for k in problem.free_lengths())
+
+
+def _same_optimum(problem, a: Outcome, b: Outcome) -> bool:
+    ka, kb = a.verification.key, b.verification.key
+    return _close(problem, a.values, b.values, SAME_DESIGN) and \
+        abs(ka - kb) <= SAME_KEY_REL * max(1e-3, abs(kb))

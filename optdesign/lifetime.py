@@ -279,8 +279,8 @@ def beside(fn, *args) -> "Beside":
 
 
 class Beside:
-    """A value computed in a child process (:func:`beside`): called, it waits for it;
-    :meth:`cancel` ends the child where the value is no longer wanted (the caller unwinds
+    """A value computed in a child process (:func:`beside`): called, it waits for it
+    (:meth:`ready` tells whether it would); :meth:`cancel` ends the child where the value is no longer wanted (the caller unwinds
     from an error or a Ctrl-C: a child left alone would compute on, then block on its pipe)."""
 
     def __init__(self, fn, args, child, receive):
@@ -300,6 +300,17 @@ class Beside:
         if kind == "error":
             raise value
         return value if kind == "value" else self.fn(*self.args)
+
+    def ready(self) -> bool:
+        """Whether the value is in: asked for now, it would not wait for the child (its
+        value or error has come, or it has ended; or there is no child, and the value would
+        be computed here)."""
+        if self.child is None:
+            return True
+        try:
+            return self.receive.poll(0)
+        except (EOFError, OSError):
+            return True
 
     def cancel(self) -> None:
         """End the child, if it still runs, and forget its value (asked for after this,

@@ -38,6 +38,24 @@ def test_a_lost_child_is_computed_here():
     assert beside(_dies_in_a_child, os.getpid())() == "computed here"
 
 
+def test_ready_tells_whether_the_value_would_be_waited_for():
+    import time
+
+    def waited(pending) -> float:
+        t0 = time.perf_counter()
+        while not pending.ready():
+            assert time.perf_counter() - t0 < 30
+            time.sleep(0.01)
+        return time.perf_counter() - t0
+
+    pending = beside(time.sleep, 0.5)
+    assert not pending.ready()              # the child sleeps
+    assert waited(pending) > 0.2 and pending() is None
+    lost = beside(_dies_in_a_child, os.getpid())
+    waited(lost)                            # ready once it ended without a word
+    assert lost() == "computed here"
+
+
 def test_a_cancelled_child_ends_and_its_value_is_not_asked_for():
     import multiprocessing
     import time

@@ -200,13 +200,38 @@ _WORST_CACHE: dict = {}
 _WORST_CACHE_SIZE = 32
 
 
+def refined(design: Design, stroke: str, input_speed: float, e: float,
+            factor: int) -> StrokeFigures:
+    """The exact figures of ``design``'s ``stroke`` at eccentricity ``e`` on a search grid
+    ``factor`` times finer than the evaluator's (:func:`~optdesign.envelope.exact.exact_figures`:
+    the solve's accuracy record compares them with the evaluator's), remembered for the
+    designs refined last."""
+    key = (design.mechanism, design.option_key, tuple(sorted(design.values.items())),
+           stroke, input_speed, float(e), factor)
+    known = _REFINED.get(key)
+    if known is None:
+        known, _ = exact_figures(design, stroke, input_speed, e, n_grid=factor * DEFAULT_GRID)
+        if len(_REFINED) >= _REFINED_SIZE:
+            _REFINED.pop(next(iter(_REFINED)))
+        _REFINED[key] = known
+    return known
+
+
+#: :func:`refined`'s figures of the designs refined last (a solve refines its answer, and
+#: may refine a count's best optimum ahead, while it waits for a polish beside it)
+_REFINED: dict = {}
+_REFINED_SIZE = 8
+
+
 def forget() -> None:
-    """Let go of every evaluation kept (:data:`_EVALUATED`, :data:`_WORST_CACHE`, and the
-    turn quantities' maxima, :func:`optdesign.quantities.base.forget_maxima`): the next
-    evaluation of any design is made anew. For a measure of what a new problem costs a warm
-    process: a solve of a problem solved before reads its designs' figures from here."""
+    """Let go of every evaluation kept (:data:`_EVALUATED`, :data:`_WORST_CACHE`,
+    :data:`_REFINED`, and the turn quantities' maxima,
+    :func:`optdesign.quantities.base.forget_maxima`): the next evaluation of any design is
+    made anew. For a measure of what a new problem costs a warm process: a solve of a problem
+    solved before reads its designs' figures from here."""
     _EVALUATED.clear()
     _WORST_CACHE.clear()
+    _REFINED.clear()
     forget_maxima()
 
 

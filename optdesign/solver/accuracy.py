@@ -7,10 +7,21 @@ import math
 
 import numpy as np
 
-from optdesign.envelope.exact import DEFAULT_GRID, exact_figures
+from optdesign.envelope.exact import DEFAULT_GRID
 from optdesign.evaluation.design import Design
-from optdesign.evaluation.figures import eccentricities_of, evaluate
+from optdesign.evaluation.figures import eccentricities_of, evaluate, refined
 from optdesign.quantities.criteria import TOL_ANGLE_DEG, TOL_LENGTH_REL, TOL_RATIO
+
+#: the accuracy record's search grid, this many times finer than the exact evaluator's
+FINER = 4
+
+
+def refined_figures(problem, design: Design, e: float):
+    """The exact figures of ``design`` at ``e`` on the accuracy record's finer grid
+    (:func:`~optdesign.evaluation.figures.refined`, remembered: a solve may refine a count's
+    best optimum ahead, while it waits for a polish beside it)."""
+    return refined(design, problem.stroke, problem.input_speed, e, FINER)
+
 
 def solve_accuracy(problem, best) -> dict:
     """The ``accuracy`` dict of a :class:`~optdesign.solver.result.SolveResult`.
@@ -20,8 +31,8 @@ def solve_accuracy(problem, best) -> dict:
 
     * ``exact_error_estimate``: largest change of δ and of the ratio over the listed
       eccentricities when the exact evaluator's search grid is refined from ``exact_grid`` to
-      4·``exact_grid`` (its root finding is to 1e-14 rad, so this is ~1e-15 unless a run or a
-      stationary point was missed);
+      :data:`FINER`·``exact_grid`` (its root finding is to 1e-14 rad, so this is ~1e-15
+      unless a run or a stationary point was missed);
     * ``surrogate_gap``: the NLP's δ minus the exact δ at the optimum (the log-sum-exp part of
       the surrogate only matters at minima inside a run; hand-overs and peaks are exact);
     * ``transmission_angle_sample_gap_deg``: least transmission angle at the NLP's crank samples
@@ -50,8 +61,7 @@ def solve_accuracy(problem, best) -> dict:
         # the grid the answer was verified on: that evaluation, from the evaluator's memory
         coarse = evaluate(design, problem.stroke, problem.input_speed, (e,)).per_e[0] \
             .figures[problem.stroke]
-        fine, _ = exact_figures(design, problem.stroke, problem.input_speed, e,
-                                n_grid=4 * DEFAULT_GRID)
+        fine = refined_figures(problem, design, e)
         definition = problem.objective.ripple
         if e in problem.eccentricities:
             d_delta = max(d_delta, abs(coarse.ripple(definition) - fine.ripple(definition)))

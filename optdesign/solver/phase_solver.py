@@ -60,7 +60,8 @@ class Timings:
     ipopt: float = 0.0
     verification: float = 0.0
     #: of the stages' time above, the seconds spent in a process beside the solve's own, at
-    #: the same time as it (the best basins polished at once: :meth:`~optdesign.solver.polishing.Polishing.basins`)
+    #: the same time as it (the best basins polished at once:
+    #: :meth:`optdesign.solver.polishing.Polishing.basins`)
     beside: float = 0.0
 
     @contextmanager

@@ -10,8 +10,12 @@ finds, the best of them and every polish's record are this module's.
 from __future__ import annotations
 
 from contextlib import nullcontext
+from functools import partial
 
+from optdesign.evaluation.design import Design
+from optdesign.evaluation.figures import eccentricities_of
 from optdesign.numerics import lanes
+from optdesign.solver.accuracy import refined_figures
 from optdesign.solver.phase_solver import (AS_IT_IS, EXHAUSTED, JOINED, STALLED, SUCCESS,
                                            Outcome, PhaseSolver, Timings)
 from optdesign.solver.result import PhaseResult, StartRecord
@@ -22,6 +26,7 @@ from optdesign.solver.verify import Verification
 #: to the box) and their objectives by less than SAME_KEY_REL
 SAME_DESIGN = 1e-4
 SAME_KEY_REL = 1e-6
+
 
 class Polishing:
     """The polishes of one phase count: their records, the distinct optima, the best."""
@@ -36,6 +41,14 @@ class Polishing:
         self.outcomes: list[Outcome] = []
         self.polished = 0
         self.improved_at = 0          # the polish that last improved on the best
+        #: designs a later step of the solve checks exactly as they are (the file's own):
+        #: checked while this process waits for a polish beside it (:meth:`_awaited`)
+        self.checked_later: list[dict] = []
+        #: whether this count's best optimum, should it be the solve's answer, is refined
+        #: for the answer's accuracy record (:func:`~optdesign.solver.accuracy.solve_accuracy`)
+        self.refined_later = False
+        #: the line screening through the design it was made for (:meth:`_line_seeds`)
+        self._lines: dict = {}
 
     def polish(self, values: dict, ver: Verification | None = None) -> Outcome:
         """IPOPT from ``values`` (its start's check ``ver``, when done already), recorded: a
@@ -133,7 +146,12 @@ class Polishing:
             raise
         for k, values in enumerate(others):
             if k < len(at_once):
-                outcome, timings, _ = at_once[k]()      # (its NLPs: its own solver's)
+                try:
+                    outcome, timings, _ = self._awaited(at_once[k])  # (its NLPs: its own)
+                except BaseException:
+                    for pending in at_once[k + 1:]:
+                        pending.cancel()
+                    raise
             else:
                 outcome, timings = _polish_beside(self.problem, self.count, values,
                                                   self.solver.checks_in_parallel)
@@ -158,7 +176,7 @@ class Polishing:
                         self.polished - max(self.improved_at, s.basins) >= s.basins):
                     return       # agreed, or `basins` more polishes found nothing better
                 if ahead is not None and ahead[0] == i and ahead[2] == self._known():
-                    outcome = self._record_made(*ahead[1](), beside=True)
+                    outcome = self._record_made(*self._awaited(ahead[1]), beside=True)
                     ahead = None
                 else:
                     ahead = _dropped(ahead)
@@ -174,6 +192,58 @@ class Polishing:
                     return
         finally:
             _dropped(ahead)
+
+    def _awaited(self, pending):
+        """The value of ``pending``, a polish in a process beside this one. Until it is in,
+        this process makes, one at a time, what a later step of the solve will ask of it
+        (:meth:`_while_waiting`): the same computations, on a core that would idle, which
+        that step then finds made (the answer the same to the bit)."""
+        try:
+            pieces = self._while_waiting()
+            while not pending.ready():
+                piece = next(pieces, None)
+                if piece is None:
+                    break
+                with lanes.threads(1):          # the other core is the polish's
+                    piece()
+            return pending()
+        except BaseException:
+            pending.cancel()
+            raise
+
+    def _while_waiting(self):
+        """What a wait for a polish beside can make ahead (:meth:`_awaited`), in turn: the
+        exact check of each design a later step checks as it is (:attr:`checked_later`,
+        kept in the evaluator's memory of checked designs); then, for the best optimum so
+        far, the line screening through it (:meth:`lines`, kept for the design it was made
+        for) and, with :attr:`refined_later`, its figures on the accuracy record's finer grid
+        at each eccentricity (kept in the evaluator's memory): each used where that optimum
+        is still the best when they are asked for."""
+        while self.checked_later:
+            yield partial(self.solver.as_it_is, self.checked_later.pop(0))
+        if self.best is None:
+            return
+        if self.polished < self.problem.solver.starts:
+            yield partial(self._line_seeds, self.best.values)
+        if self.refined_later:
+            design = Design.from_problem(self.problem, self.best.values)
+            for e in eccentricities_of(self.problem):
+                yield partial(self._refined, design, e)
+
+    def _line_seeds(self, values: dict) -> list:
+        """:func:`~optdesign.solver.screening.line_seeds` through ``values``, made once for
+        the last design asked for."""
+        key = tuple(sorted(values.items()))
+        if key not in self._lines:
+            with self.solver.timings.stage("screening"):
+                self._lines = {key: line_seeds(self.problem, self.count, values)}
+        return self._lines[key]
+
+    def _refined(self, design, e: float) -> None:
+        """``design``'s figures at ``e`` on the accuracy record's finer grid, made ahead
+        (:func:`~optdesign.solver.accuracy.refined_figures` keeps them)."""
+        with self.solver.timings.stage("verification"):
+            refined_figures(self.problem, design, e)
 
     def _known(self) -> tuple:
         """What a polish of this count starts from besides its start: the optima found (it
@@ -227,9 +297,10 @@ class Polishing:
         it improves on the best (within the polish budget)."""
         tried: list[dict] = []
         while self.best is not None and self.polished < self.problem.solver.starts:
-            with self.solver.timings.stage("screening"), lanes.threads(self.workers):
-                beside = [c for c in line_seeds(self.problem, self.count, self.best.values)
-                          if not any(_close(self.problem, c.values, t) for t in tried)]
+            with lanes.threads(self.workers):
+                seeds = self._line_seeds(self.best.values)
+            beside = [c for c in seeds if not any(_close(self.problem, c.values, t)
+                                                  for t in tried)]
             if not beside:
                 return
             tried.append(beside[0].values)

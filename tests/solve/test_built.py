@@ -5,6 +5,7 @@ import pickle
 
 import pytest
 
+from optdesign.evaluation import figures
 from optdesign.problem.loader import load_problem, problem_from_dict
 from optdesign.solver import built, phase_solver, polishing, solve
 from optdesign.solver.nlp import PhaseNLP
@@ -225,3 +226,44 @@ def test_a_further_basin_begun_with_stale_knowledge_is_polished_again_here(
     assert answer(two) == answer(one) and _records(two) == _records(one)
     # the first, then (the second beside) the third and the fourth here, in this order
     assert [p[1:] for p in polishes if p[0] == "here"] == [in_turn[k][1:] for k in (0, 2, 3)]
+
+
+def test_a_wait_for_a_polish_beside_makes_what_the_solve_asks_for_later(
+        fresh, logged_polishes, monkeypatch):
+    """While the solving process waits for a polish beside it (here: every wait, as long as
+    there is something to make), it checks the file's own design as it is, screens the lines
+    through the best optimum so far and refines it for the accuracy record; the later steps
+    find them made. Every record, the accuracy record and the answer are the one-worker
+    solve's, to the bit."""
+    from optdesign import lifetime
+
+    made = []
+    while_waiting = polishing.Polishing._while_waiting
+
+    def logged(self):
+        for piece in while_waiting(self):
+            made.append(piece.func.__name__)
+            yield piece
+
+    def counted(name, function):
+        def call(*args, **kwargs):
+            if name == "lines" or "n_grid" in kwargs:       # a refinement, not a check
+                calls.append(name)
+            return function(*args, **kwargs)
+        return call
+
+    calls = []
+    monkeypatch.setattr(lifetime.Beside, "ready", lambda self: False)
+    monkeypatch.setattr(polishing.Polishing, "_while_waiting", logged)
+    monkeypatch.setattr(polishing, "line_seeds", counted("lines", polishing.line_seeds))
+    monkeypatch.setattr(figures, "exact_figures", counted("refined", figures.exact_figures))
+    figures.forget()
+    two, _ = logged_polishes("housing_disc", 2)
+    assert {"as_it_is", "_line_seeds", "_refined"} <= set(made)
+    made_ahead, calls = calls, []
+    figures.forget()
+    one, _ = logged_polishes("housing_disc", 1)
+    assert answer(two) == answer(one) and _records(two) == _records(one)
+    assert two.accuracy == one.accuracy
+    # made once, ahead: no line screening nor refinement was made twice for one design
+    assert made_ahead == calls

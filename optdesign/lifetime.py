@@ -296,7 +296,7 @@ class Beside:
         except BaseException:               # a Ctrl-C while waiting: the child is ended
             self.cancel()
             raise
-        self._close()
+        self._close(wait=False)
         if kind == "error":
             raise value
         return value if kind == "value" else self.fn(*self.args)
@@ -320,9 +320,16 @@ class Beside:
             self._close()
         self.fn = _cancelled
 
-    def _close(self) -> None:
+    def _close(self, wait: bool = True) -> None:
+        """Close the pipe and let the child go; with ``wait``, once it has ended. Without,
+        a child that has sent its value is not waited for as it exits (the end of a process
+        that shares much of this one's memory takes milliseconds): multiprocessing reaps it
+        as the next child starts, or as this process exits."""
         self.receive.close()
-        self.child.join()
+        if wait:
+            self.child.join()
+        else:
+            self.child.join(0)
         self.child = None
 
 

@@ -85,11 +85,37 @@ def test_forget_lets_go_of_every_evaluation():
     housing = get_quantity("housing_radius")
     maxima = housing.maxima(design)
     assert housing.maxima(design) is maxima and quantities_base._MAXIMA
+    refined = evaluation.refined(design, "forward", 1.0, 1.0, 2)
+    assert evaluation.refined(design, "forward", 1.0, 1.0, 2) is refined
     evaluation.forget()
     assert not evaluation._EVALUATED and not evaluation._WORST_CACHE
-    assert not quantities_base._MAXIMA
+    assert not evaluation._REFINED and not quantities_base._MAXIMA
     again = evaluation.evaluate(design, "forward", 1.0)
     assert again.per_e[0] is not first.per_e[0]
     assert again.per_e[0].figures == first.per_e[0].figures
     assert housing.maxima(design) is not maxima
     assert np.array_equal(housing.maxima(design).values, maxima.values)
+
+
+def test_an_evaluation_made_beside_is_remembered_here(monkeypatch):
+    """An exact check made in a process forked from this one (a polish beside the solve),
+    handed back and remembered, is read by the next check of that design here: nothing is
+    evaluated again, and the figures are the child's to the bit (the regulation interval's
+    worst too)."""
+    from optdesign.lifetime import beside
+    from tests.conftest import ROOT
+
+    problem = load_problem(ROOT / "problems" / "sharkov2022_disc_interval.yaml")
+    evaluation.forget()
+    made = beside(evaluation.evaluate_problem, problem)()
+    assert made.worst is not None and not evaluation._EVALUATED
+    evaluation.remember(problem, made)
+
+    def not_again(*args, **kwargs):
+        raise AssertionError("evaluated again")
+
+    monkeypatch.setattr(evaluation, "_evaluate_at", not_again)
+    monkeypatch.setattr(evaluation, "worst_over_range", not_again)
+    here = evaluation.evaluate_problem(problem)
+    assert [x.figures for x in here.per_e] == [x.figures for x in made.per_e]
+    assert here.worst.delta == made.worst.delta

@@ -70,6 +70,8 @@ class Evaluation:
     #: transmission angle over the whole interval (:mod:`optdesign.evaluation.regulation`)
     worst: RangeWorst | None = None
     worst_definition: str = "midrange"
+    #: the search grid's size it was evaluated on (:func:`evaluate`'s ``n_grid``)
+    n_grid: int = DEFAULT_GRID
 
     @property
     def assembles(self) -> bool:
@@ -125,21 +127,18 @@ def evaluate(design: Design, stroke: str, input_speed: float,
     hand-over runs are those of ``stroke``.
     """
     strokes = strokes or (stroke,)
-    ev = Evaluation(design, stroke, input_speed)
+    ev = Evaluation(design, stroke, input_speed, n_grid=n_grid)
     try:
         design.model.check_values(design.values, design.count)
     except ProblemError as exc:
         ev.failure = exc
         return ev
     for e in eccentricities:
-        key = (design.mechanism, design.option_key, tuple(sorted(design.values.items())),
-               stroke, input_speed, float(e), tuple(strokes), n_grid)
+        key = _evaluated_key(design, stroke, input_speed, e, strokes, n_grid)
         known = _EVALUATED.get(key)
         if known is None:
             known = _evaluate_at(design, stroke, input_speed, e, strokes, n_grid)
-            if len(_EVALUATED) >= _EVALUATED_SIZE:
-                _EVALUATED.pop(next(iter(_EVALUATED)))
-            _EVALUATED[key] = known
+            _keep(_EVALUATED, _EVALUATED_SIZE, key, known)
         if isinstance(known, AssemblyError):
             ev.failure, ev.failed_eccentricity = known, e
             return ev
@@ -151,6 +150,36 @@ def evaluate(design: Design, stroke: str, input_speed: float,
 #: a solve verifies a design again as the next polish's start (the same figures, exactly)
 _EVALUATED: dict = {}
 _EVALUATED_SIZE = 64
+
+
+def _evaluated_key(design: Design, stroke: str, input_speed: float, e: float, strokes,
+                   n_grid: int) -> tuple:
+    """What :data:`_EVALUATED` keeps an eccentricity's evaluation of ``design`` under."""
+    return (design.mechanism, design.option_key, tuple(sorted(design.values.items())),
+            stroke, input_speed, float(e), tuple(strokes), n_grid)
+
+
+def remember(problem, evaluation: Evaluation) -> None:
+    """Keep ``evaluation``, an :func:`evaluate_problem` of ``problem``'s made elsewhere (in a
+    process forked from this one: a polish beside the solve), as if it had been made here:
+    the next evaluation of that design reads it (the same figures, to the bit)."""
+    if not evaluation.assembles:
+        return
+    design = evaluation.design
+    strokes = tuple(evaluation.per_e[0].figures) if evaluation.per_e else ()
+    for known in evaluation.per_e:
+        key = _evaluated_key(design, evaluation.stroke, evaluation.input_speed,
+                             known.eccentricity, strokes, evaluation.n_grid)
+        _keep(_EVALUATED, _EVALUATED_SIZE, key, known)
+    if evaluation.worst is not None and evaluation.worst_definition == problem.objective.ripple:
+        _keep(_WORST_CACHE, _WORST_CACHE_SIZE, _worst_key(problem, design), evaluation.worst)
+
+
+def _keep(memory: dict, size: int, key, value) -> None:
+    """``value`` into ``memory`` under ``key``, the oldest let go beyond ``size``."""
+    if key not in memory and len(memory) >= size:
+        memory.pop(next(iter(memory)))
+    memory[key] = value
 
 
 def _evaluate_at(design: Design, stroke: str, input_speed: float, e: float,
@@ -211,9 +240,7 @@ def refined(design: Design, stroke: str, input_speed: float, e: float,
     known = _REFINED.get(key)
     if known is None:
         known, _ = exact_figures(design, stroke, input_speed, e, n_grid=factor * DEFAULT_GRID)
-        if len(_REFINED) >= _REFINED_SIZE:
-            _REFINED.pop(next(iter(_REFINED)))
-        _REFINED[key] = known
+        _keep(_REFINED, _REFINED_SIZE, key, known)
     return known
 
 
@@ -238,16 +265,19 @@ def forget() -> None:
 def _worst_of(problem, design: Design) -> RangeWorst:
     """:func:`~optdesign.evaluation.regulation.worst_over_range` of ``design`` over the problem's
     interval, remembered for the last few designs."""
-    names = interval_quantities(problem)
-    key = (problem.mechanism, problem.stroke, problem.input_speed, problem.objective.ripple,
-           problem.eccentricity_range, tuple(sorted(problem.options.items())),
-           tuple(sorted((k, float(v)) for k, v in design.values.items())), names)
+    key = _worst_key(problem, design)
     worst = _WORST_CACHE.get(key)
     if worst is None:
         worst = worst_over_range(design, problem.stroke, problem.input_speed,
                                  problem.objective.ripple, *problem.eccentricity_range,
-                                 quantities=names)
-        if len(_WORST_CACHE) >= _WORST_CACHE_SIZE:
-            _WORST_CACHE.pop(next(iter(_WORST_CACHE)))
-        _WORST_CACHE[key] = worst
+                                 quantities=interval_quantities(problem))
+        _keep(_WORST_CACHE, _WORST_CACHE_SIZE, key, worst)
     return worst
+
+
+def _worst_key(problem, design: Design) -> tuple:
+    """What :data:`_WORST_CACHE` keeps ``design``'s search over ``problem``'s interval under."""
+    return (problem.mechanism, problem.stroke, problem.input_speed, problem.objective.ripple,
+            problem.eccentricity_range, tuple(sorted(problem.options.items())),
+            tuple(sorted((k, float(v)) for k, v in design.values.items())),
+            interval_quantities(problem))

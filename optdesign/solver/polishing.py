@@ -13,7 +13,7 @@ from contextlib import nullcontext
 from functools import partial
 
 from optdesign.evaluation.design import Design
-from optdesign.evaluation.figures import eccentricities_of
+from optdesign.evaluation.figures import eccentricities_of, remember
 from optdesign.numerics import lanes
 from optdesign.solver.accuracy import refined_figures
 from optdesign.solver.phase_solver import (AS_IT_IS, EXHAUSTED, JOINED, STALLED, SUCCESS,
@@ -264,12 +264,16 @@ class Polishing:
         """The outcome of a polish made by another solver or (``beside``) in a process
         beside this one, recorded as this solver's own with its stage times (those made
         beside counted as such); the NLPs it came to hold are built here too, in its order,
-        so that this solver holds what it would hold had the polish been made by it."""
+        so that this solver holds what it would hold had the polish been made by it, and the
+        exact check it ended on is kept in this process's memory of checked designs (a later
+        check of that design, the answer's accuracy record, reads it)."""
         for slots in built_slots:
             self.solver.nlp_of(slots)
         self.solver.timings.add(timings)
         if beside:
             self.solver.timings.beside += timings.total()
+            if outcome.verification.evaluation is not None:   # its end's exact check
+                remember(self.problem, outcome.verification.evaluation)
         return self.record(outcome)
 
     def converged(self) -> bool:

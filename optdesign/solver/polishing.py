@@ -42,7 +42,8 @@ class Polishing:
         self.polished = 0
         self.improved_at = 0          # the polish that last improved on the best
         #: designs a later step of the solve checks exactly as they are (the file's own):
-        #: checked while this process waits for a polish beside it (:meth:`_awaited`)
+        #: checked by the process beside the first polish once its polish is done
+        #: (:meth:`_head`), or else while this process waits for one (:meth:`_awaited`)
         self.checked_later: list[dict] = []
         #: whether this count's best optimum, should it be the solve's answer, is refined
         #: for the answer's accuracy record (:func:`~optdesign.solver.accuracy.solve_accuracy`)
@@ -135,8 +136,11 @@ class Polishing:
         others = starts[1:]
         if self.workers > 1:
             self.solver.prepare()           # built once, before the processes part
-        at_once = _head_beside(self.problem, self.count, others[:self.workers - 1],
-                               self.solver.checks_in_parallel)
+        beside, handed = others[:self.workers - 1], []
+        if beside:      # checked there once its polish is done (it often ends first)
+            handed, self.checked_later = self.checked_later, []
+        at_once = _head_beside(self.problem, self.count, beside,
+                               self.solver.checks_in_parallel, handed)
         try:
             with lanes.threads(1) if at_once else nullcontext():
                 self.polish(starts[0])
@@ -147,11 +151,14 @@ class Polishing:
         for k, values in enumerate(others):
             if k < len(at_once):
                 try:
-                    outcome, timings, _ = self._awaited(at_once[k])  # (its NLPs: its own)
+                    outcome, timings, _, checked = self._awaited(at_once[k])  # (its NLPs:
+                    #                                                           its own)
                 except BaseException:
                     for pending in at_once[k + 1:]:
                         pending.cancel()
                     raise
+                for evaluation in checked:
+                    remember(self.problem, evaluation)
             else:
                 outcome, timings = _polish_beside(self.problem, self.count, values,
                                                   self.solver.checks_in_parallel)
@@ -176,7 +183,8 @@ class Polishing:
                         self.polished - max(self.improved_at, s.basins) >= s.basins):
                     return       # agreed, or `basins` more polishes found nothing better
                 if ahead is not None and ahead[0] == i and ahead[2] == self._known():
-                    outcome = self._record_made(*self._awaited(ahead[1]), beside=True)
+                    outcome, timings, built_slots, _ = self._awaited(ahead[1])
+                    outcome = self._record_made(outcome, timings, built_slots, beside=True)
                     ahead = None
                 else:
                     ahead = _dropped(ahead)
@@ -213,12 +221,12 @@ class Polishing:
 
     def _while_waiting(self):
         """What a wait for a polish beside can make ahead (:meth:`_awaited`), in turn: the
-        exact check of each design a later step checks as it is (:attr:`checked_later`,
-        kept in the evaluator's memory of checked designs); then, for the best optimum so
-        far, the line screening through it (:meth:`lines`, kept for the design it was made
-        for) and, with :attr:`refined_later`, its figures on the accuracy record's finer grid
-        at each eccentricity (kept in the evaluator's memory): each used where that optimum
-        is still the best when they are asked for."""
+        exact check of each design a later step checks as it is that no process beside took
+        (:attr:`checked_later`, kept in the evaluator's memory of checked designs); then, for
+        the best optimum so far, the line screening through it (:meth:`lines`, kept for the
+        design it was made for) and, with :attr:`refined_later`, its figures on the accuracy
+        record's finer grid at each eccentricity (kept in the evaluator's memory): each used
+        where that optimum is still the best when they are asked for."""
         while self.checked_later:
             yield partial(self.solver.as_it_is, self.checked_later.pop(0))
         if self.best is None:
@@ -348,27 +356,34 @@ def _of_its_own(problem, count: int, checks_in_parallel: bool) -> "PhaseSolver":
     return solver
 
 
-def _head_beside(problem, count: int, starts: list[dict],
-                 checks_in_parallel: bool = False) -> list:
+def _head_beside(problem, count: int, starts: list[dict], checks_in_parallel: bool = False,
+                 checks: list[dict] = ()) -> list:
     """:func:`_polish_beside` of each of ``starts``, each begun in a process forked now
     (:func:`optdesign.lifetime.beside`, :func:`_polish_here`): called, each waits for its
     outcome and stage times (computed here if its process is lost). The same polish as in
-    this process, on the same memory: the outcome is the same to the bit."""
+    this process, on the same memory: the outcome is the same to the bit. The first also
+    checks ``checks`` as they are, once its polish is done."""
     from optdesign.lifetime import beside
 
     return [beside(_polish_here, _of_its_own(problem, count, checks_in_parallel), values, [],
-                   True) for values in starts]
+                   True, checks if k == 0 else ()) for k, values in enumerate(starts)]
 
 
-def _polish_here(solver: "PhaseSolver", values: dict, avoid: list[dict], secondary: bool):
+def _polish_here(solver: "PhaseSolver", values: dict, avoid: list[dict], secondary: bool,
+                 checks: list[dict] = ()):
     """``solver``'s polish of ``values`` (stopped where it joins one of ``avoid``), in a
     process forked for it, the compiled lanes on one thread (the cores are taken): its
-    outcome, its stage times and the slots of the NLPs it came to hold, in their order."""
+    outcome, its stage times, the slots of the NLPs it came to hold, in their order, and
+    the exact check (:meth:`PhaseSolver.as_it_is`) of each of ``checks``, made after it,
+    for the process that forked it to remember
+    (:func:`optdesign.evaluation.figures.remember`)."""
     before = solver.held_slots()
     solver.timings, solver.avoid = Timings(), avoid
     with lanes.threads(1):
         outcome = solver.solve_from(dict(values), secondary=secondary)
-    return outcome, solver.timings, [k for k in solver.held_slots() if k not in before]
+        checked = [solver.as_it_is(v).verification.evaluation for v in checks]
+    return (outcome, solver.timings, [k for k in solver.held_slots() if k not in before],
+            [e for e in checked if e is not None])
 
 
 def _dropped(ahead) -> None:

@@ -18,6 +18,7 @@ from optdesign.envelope.sampled import StrokeFigures, driving_speeds
 from optdesign.errors import AssemblyError, ProblemError
 from optdesign.evaluation.design import Design
 from optdesign.evaluation.regulation import RangeWorst, worst_over_range
+from optdesign.numerics.kept import keep
 from optdesign.quantities.base import forget_maxima
 from optdesign.quantities.criteria import interval_quantities
 
@@ -138,7 +139,7 @@ def evaluate(design: Design, stroke: str, input_speed: float,
         known = _EVALUATED.get(key)
         if known is None:
             known = _evaluate_at(design, stroke, input_speed, e, strokes, n_grid)
-            _keep(_EVALUATED, _EVALUATED_SIZE, key, known)
+            keep(_EVALUATED, _EVALUATED_SIZE, key, known)
         if isinstance(known, AssemblyError):
             ev.failure, ev.failed_eccentricity = known, e
             return ev
@@ -170,16 +171,10 @@ def remember(problem, evaluation: Evaluation) -> None:
     for known in evaluation.per_e:
         key = _evaluated_key(design, evaluation.stroke, evaluation.input_speed,
                              known.eccentricity, strokes, evaluation.n_grid)
-        _keep(_EVALUATED, _EVALUATED_SIZE, key, known)
+        keep(_EVALUATED, _EVALUATED_SIZE, key, known)
     if evaluation.worst is not None and evaluation.worst_definition == problem.objective.ripple:
-        _keep(_WORST_CACHE, _WORST_CACHE_SIZE, _worst_key(problem, design), evaluation.worst)
+        keep(_WORST_CACHE, _WORST_CACHE_SIZE, _worst_key(problem, design), evaluation.worst)
 
-
-def _keep(memory: dict, size: int, key, value) -> None:
-    """``value`` into ``memory`` under ``key``, the oldest let go beyond ``size``."""
-    if key not in memory and len(memory) >= size:
-        memory.pop(next(iter(memory)))
-    memory[key] = value
 
 
 def _evaluate_at(design: Design, stroke: str, input_speed: float, e: float,
@@ -240,7 +235,7 @@ def refined(design: Design, stroke: str, input_speed: float, e: float,
     known = _REFINED.get(key)
     if known is None:
         known, _ = exact_figures(design, stroke, input_speed, e, n_grid=factor * DEFAULT_GRID)
-        _keep(_REFINED, _REFINED_SIZE, key, known)
+        keep(_REFINED, _REFINED_SIZE, key, known)
     return known
 
 
@@ -271,7 +266,7 @@ def _worst_of(problem, design: Design) -> RangeWorst:
         worst = worst_over_range(design, problem.stroke, problem.input_speed,
                                  problem.objective.ripple, *problem.eccentricity_range,
                                  quantities=interval_quantities(problem))
-        _keep(_WORST_CACHE, _WORST_CACHE_SIZE, key, worst)
+        keep(_WORST_CACHE, _WORST_CACHE_SIZE, key, worst)
     return worst
 
 

@@ -26,6 +26,7 @@ import casadi as ca
 import numpy as np
 
 from optdesign.envelope.exact import search_grid
+from optdesign.numerics.kept import keep
 from optdesign.quantities.extremes import BREAK_STEP, turn_maxima
 
 #: how a quantity's values combine: into its worst, and across its components
@@ -171,10 +172,8 @@ class TurnQuantity(Quantity):
             grid = self.from_kinematics(sampled) if sampled is not None else None
             if grid is not None and grid.shape[1] != phi.size:
                 grid = None                 # sampled on another grid: sample it here
-            known = turn_maxima(g, dg, design.p_fixed(eccentricity), phi, breaks, grid)
-            if len(_MAXIMA) >= _MAXIMA_SIZE:
-                _MAXIMA.pop(next(iter(_MAXIMA)))
-            _MAXIMA[key] = known
+            known = keep(_MAXIMA, _MAXIMA_SIZE, key,
+                         turn_maxima(g, dg, design.p_fixed(eccentricity), phi, breaks, grid))
         return known
 
     def exact(self, evaluation, eccentricity, ripple="midrange"):

@@ -17,6 +17,7 @@ import casadi as ca
 import numpy as np
 
 from optdesign.numerics.buffered import buffered
+from optdesign.numerics.kept import keep
 from optdesign.numerics.lanes import Lanes
 
 TWO_PI = 2 * np.pi
@@ -164,9 +165,7 @@ def _record(function) -> list:
     """``function``'s entry in :data:`_SEARCHED` (made on first use)."""
     known = _SEARCHED.get(id(function))
     if known is None or known[0] is not function:
-        while len(_SEARCHED) >= SEARCHED_KEPT:
-            _SEARCHED.pop(next(iter(_SEARCHED)))
-        known = _SEARCHED[id(function)] = [function, 0, None, {}]
+        known = keep(_SEARCHED, SEARCHED_KEPT, id(function), [function, 0, None, {}])
     return known
 
 

@@ -280,8 +280,9 @@ def beside(fn, *args) -> "Beside":
 
 class Beside:
     """A value computed in a child process (:func:`beside`): called, it waits for it
-    (:meth:`ready` tells whether it would); :meth:`cancel` ends the child where the value is no longer wanted (the caller unwinds
-    from an error or a Ctrl-C: a child left alone would compute on, then block on its pipe)."""
+    (:meth:`ready` tells whether it would); :meth:`cancel` ends the child where the value is
+    no longer wanted (the caller unwinds from an error or a Ctrl-C: a child left alone would
+    compute on, then block on its pipe)."""
 
     def __init__(self, fn, args, child, receive):
         self.fn, self.args, self.child, self.receive = fn, args, child, receive

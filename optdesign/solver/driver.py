@@ -59,10 +59,11 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
     then polish the best basins (:meth:`Polishing.basins`). ``neighbours``: optima of other
     phase counts, screened with the box (continuation: the optimum of a neighbouring count
     often lies in the best basin of this one, and ranks first when it does).
-    ``sensitivities``: the optimum's block computed here, on the evaluation its polish verified (a solve of one count;
-    otherwise :func:`summarized` computes the answer's alone). ``scored``: the count's box
-    sample scored already (:func:`~optdesign.solver.screening.promise`), used where the
-    screening has no neighbour to add.
+    ``sensitivities``: the optimum's block computed here, on the evaluation its polish
+    verified (a solve of one count; otherwise :func:`summarized` computes the answer's
+    alone). ``scored``: the count's box sample scored already
+    (:func:`~optdesign.solver.screening.promise`), used where the screening has no neighbour
+    to add.
 
     The verdict is a claim with its evidence. The design the file gives (its fixed and
     initial values) is a candidate as it is, so the answer is never worse than it. With

@@ -93,7 +93,7 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
     given = problem.start_values() | {problem.model.count_variable: count}
     if not robust and _user_gave(problem):
         work.checked_later.append(given)        # as it is, below: checked while a polish waits
-    work.refined_later = not robust             # (a robust answer is the robust polishes')
+    work.records_later = not robust             # (a robust answer is the robust polishes')
     relax = explain and not robust and bool(screening.seeds)
     reach = None
     if relax and screening.n_feasible == 0:

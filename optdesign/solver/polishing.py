@@ -15,6 +15,7 @@ from functools import partial
 from optdesign.evaluation.design import Design
 from optdesign.evaluation.figures import eccentricities_of, remember
 from optdesign.numerics import lanes
+from optdesign.quantities import design_quantities
 from optdesign.solver.accuracy import refined_figures
 from optdesign.solver.phase_solver import (AS_IT_IS, EXHAUSTED, JOINED, STALLED, SUCCESS,
                                            Outcome, PhaseSolver, Timings)
@@ -45,9 +46,10 @@ class Polishing:
         #: checked by the process beside the first polish once its polish is done
         #: (:meth:`_head`), or else while this process waits for one (:meth:`_awaited`)
         self.checked_later: list[dict] = []
-        #: whether this count's best optimum, should it be the solve's answer, is refined
-        #: for the answer's accuracy record (:func:`~optdesign.solver.accuracy.solve_accuracy`)
-        self.refined_later = False
+        #: whether this count's best optimum is the one whose records the solve makes (its
+        #: quantities; refined for the accuracy record, should it be the solve's answer:
+        #: :func:`~optdesign.solver.accuracy.solve_accuracy`), not a nominal problem's
+        self.records_later = False
         #: the line screening through the design it was made for (:meth:`_line_seeds`)
         self._lines: dict = {}
 
@@ -224,19 +226,21 @@ class Polishing:
         exact check of each design a later step checks as it is that no process beside took
         (:attr:`checked_later`, kept in the evaluator's memory of checked designs); then, for
         the best optimum so far, the line screening through it (:meth:`lines`, kept for the
-        design it was made for) and, with :attr:`refined_later`, its figures on the accuracy
-        record's finer grid at each eccentricity (kept in the evaluator's memory): each used
-        where that optimum is still the best when they are asked for."""
+        design it was made for) and, with :attr:`records_later`, its figures on the accuracy
+        record's finer grid at each eccentricity (kept in the evaluator's memory) and its
+        quantities (their maxima over the turn kept by each quantity): each used where that
+        optimum is still the best when they are asked for."""
         while self.checked_later:
             yield partial(self.solver.as_it_is, self.checked_later.pop(0))
         if self.best is None:
             return
         if self.polished < self.problem.solver.starts:
             yield partial(self._line_seeds, self.best.values)
-        if self.refined_later:
+        if self.records_later:
             design = Design.from_problem(self.problem, self.best.values)
             for e in eccentricities_of(self.problem):
                 yield partial(self._refined, design, e)
+            yield partial(design_quantities, self.problem, self.best.verification.evaluation)
 
     def _line_seeds(self, values: dict) -> list:
         """:func:`~optdesign.solver.screening.line_seeds` through ``values``, made once for

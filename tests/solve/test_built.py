@@ -231,8 +231,8 @@ def test_a_further_basin_begun_with_stale_knowledge_is_polished_again_here(
 def test_a_wait_for_a_polish_beside_makes_what_the_solve_asks_for_later(
         fresh, logged_polishes, monkeypatch):
     """While the solving process waits for a polish beside it (here: every wait, as long as
-    there is something to make), it screens the lines through the best optimum so far and
-    refines it for the accuracy record; the later steps find them made (on the housing
+    there is something to make), it screens the lines through the best optimum so far,
+    refines it for the accuracy record and finds its quantities; the later steps find them made (on the housing
     problem the first polish's optimum stays the best). Every record, the accuracy record
     and the answer are the one-worker solve's, to the bit."""
     from optdesign import lifetime
@@ -259,12 +259,13 @@ def test_a_wait_for_a_polish_beside_makes_what_the_solve_asks_for_later(
     monkeypatch.setattr(figures, "exact_figures", counted("refined", figures.exact_figures))
     figures.forget()
     two, _ = logged_polishes("housing_disc", 2)
-    assert {"_line_seeds", "_refined"} <= set(made)
+    assert {"_line_seeds", "_refined", "design_quantities"} <= set(made)
     made_ahead, calls = calls, []
     figures.forget()
     one, _ = logged_polishes("housing_disc", 1)
     assert answer(two) == answer(one) and _records(two) == _records(one)
     assert two.accuracy == one.accuracy
+    assert [p.quantities for p in two.per_phase] == [p.quantities for p in one.per_phase]
     # made once, ahead: no line screening nor refinement was made twice for one design
     assert made_ahead == calls
 

@@ -155,7 +155,8 @@ _EVALUATED_SIZE = 64
 
 def _evaluated_key(design: Design, stroke: str, input_speed: float, e: float, strokes,
                    n_grid: int) -> tuple:
-    """What :data:`_EVALUATED` keeps an eccentricity's evaluation of ``design`` under."""
+    """What an eccentricity's evaluation of ``design`` on a grid of ``n_grid`` is kept under
+    (:data:`_EVALUATED`; a refinement's, of its stroke alone, in :data:`_REFINED`)."""
     return (design.mechanism, design.option_key, tuple(sorted(design.values.items())),
             stroke, input_speed, float(e), tuple(strokes), n_grid)
 
@@ -174,7 +175,6 @@ def remember(problem, evaluation: Evaluation) -> None:
         keep(_EVALUATED, _EVALUATED_SIZE, key, known)
     if evaluation.worst is not None and evaluation.worst_definition == problem.objective.ripple:
         keep(_WORST_CACHE, _WORST_CACHE_SIZE, _worst_key(problem, design), evaluation.worst)
-
 
 
 def _evaluate_at(design: Design, stroke: str, input_speed: float, e: float,
@@ -230,8 +230,7 @@ def refined(design: Design, stroke: str, input_speed: float, e: float,
     ``factor`` times finer than the evaluator's (:func:`~optdesign.envelope.exact.exact_figures`:
     the solve's accuracy record compares them with the evaluator's), remembered for the
     designs refined last."""
-    key = (design.mechanism, design.option_key, tuple(sorted(design.values.items())),
-           stroke, input_speed, float(e), factor)
+    key = _evaluated_key(design, stroke, input_speed, e, (stroke,), factor * DEFAULT_GRID)
     known = _REFINED.get(key)
     if known is None:
         known, _ = exact_figures(design, stroke, input_speed, e, n_grid=factor * DEFAULT_GRID)

@@ -146,25 +146,18 @@ class Polishing:
         try:
             with lanes.threads(1) if at_once else nullcontext():
                 self.polish(starts[0])
+            made = [self._awaited(pending) for pending in at_once]
         except BaseException:
-            for pending in at_once:
+            for pending in at_once:         # (one taken already: nothing to end)
                 pending.cancel()
             raise
-        for k, values in enumerate(others):
-            if k < len(at_once):
-                try:
-                    outcome, timings, _, checked = self._awaited(at_once[k])  # (its NLPs:
-                    #                                                           its own)
-                except BaseException:
-                    for pending in at_once[k + 1:]:
-                        pending.cancel()
-                    raise
-                for evaluation in checked:
-                    remember(self.problem, evaluation)
-            else:
-                outcome, timings = _polish_beside(self.problem, self.count, values,
-                                                  self.solver.checks_in_parallel)
-            self._record_made(outcome, timings, beside=k < len(at_once))
+        for outcome, timings, _, checked in made:      # (its NLPs: its own solver's)
+            for evaluation in checked:
+                remember(self.problem, evaluation)
+            self._record_made(outcome, timings, beside=True)
+        for values in others[len(at_once):]:
+            self._record_made(*_polish_beside(self.problem, self.count, values,
+                                              self.solver.checks_in_parallel))
 
     def _further(self, starts: list[dict]) -> None:
         """The basins after the best ones, in the screening's order, while they can bring a

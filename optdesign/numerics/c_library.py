@@ -42,7 +42,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from optdesign.numerics.user_cache import trailer, trusted, write as _write
+from optdesign.numerics.user_cache import intact, trailer, write as _write
 
 COMPILER = "gcc"
 #: -O1: -O2 is no faster on these functions and compiles longer; no contraction into fused
@@ -139,7 +139,7 @@ def library(rec: Recipe, where: Path) -> Path | None:
     trailer's checksum), or built from something else (its trailer's digest). Checked before
     it is loaded: a library cut short would crash the process that maps it."""
     path = where / f"{rec.name}.so"
-    return path if trusted(path, TRAILER_TAGS[rec.kind], rec.digest) is not None else None
+    return path if intact(path, TRAILER_TAGS[rec.kind], rec.digest) else None
 
 
 def _lock(where: Path, name: str) -> bool:

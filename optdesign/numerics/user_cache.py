@@ -15,9 +15,11 @@ from __future__ import annotations
 
 import hashlib
 import logging
+import mmap
 import os
 import stat
 import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 
 #: on | load | off (see the module's text)
@@ -97,20 +99,47 @@ def trusted(path: Path, tag: str, digest: str) -> bytes | None:
     """The bytes of ``path`` before its trailer, or None: missing, not a regular file of
     this user's, writable by group or others, cut short or changed since it was written (its
     trailer's checksum), or made from something else (its trailer's digest)."""
+    with _sealed(path, tag, digest) as body:
+        return None if body is None else bytes(body)
+
+
+def intact(path: Path, tag: str, digest: str) -> bool:
+    """Whether ``path`` is to be trusted (:func:`trusted`), its bytes checked where they lie
+    (mapped, not read into memory: a compiled library is megabytes)."""
+    with _sealed(path, tag, digest) as body:
+        return body is not None
+
+
+@contextmanager
+def _sealed(path: Path, tag: str, digest: str):
+    """Inside, a view of the bytes of ``path`` before its trailer (the file mapped, read
+    only), or None where it is not to be trusted (:func:`trusted`). Opened without following
+    a link or waiting on a pipe, then asked what it is: the file checked is the file read."""
     try:
-        st = os.lstat(path)
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
+    except OSError:
+        yield None
+        return
+    try:
+        st = os.fstat(fd)
         if not stat.S_ISREG(st.st_mode) or st.st_uid != os.getuid() or st.st_mode & 0o022:
             log.debug("%s is not this user's own or others may write it: ignored", path)
-            return None
-        data = path.read_bytes()
-    except OSError:
-        return None
-    size = trailer_bytes(tag)
-    body = data[:-size]
-    if len(data) <= size or data[-size:] != trailer(tag, digest, body):
-        log.debug("%s is corrupt or was made from something else: ignored", path)
-        return None
-    return body
+            yield None
+            return
+        size = trailer_bytes(tag)
+        if st.st_size <= size:
+            log.debug("%s is corrupt or was made from something else: ignored", path)
+            yield None
+            return
+        with mmap.mmap(fd, 0, access=mmap.ACCESS_READ) as mapped, \
+                memoryview(mapped) as whole, whole[:-size] as body, whole[-size:] as end:
+            if end != trailer(tag, digest, body):
+                log.debug("%s is corrupt or was made from something else: ignored", path)
+                yield None
+            else:
+                yield body
+    finally:
+        os.close(fd)
 
 
 def write(path: Path, data: bytes, keep: bool = False) -> Path:

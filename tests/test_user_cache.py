@@ -1,0 +1,74 @@
+"""The files of the user's cache a process may trust (optdesign.numerics.user_cache): the
+checks made on the file where it lies, mapped (intact) or read (trusted), agree; a link, a
+pipe, a file cut short or changed, another's and one made from something else are refused."""
+import os
+import threading
+
+import pytest
+
+from optdesign.numerics import user_cache
+
+TAG, DIGEST = "optdesign-test", "d" * 64
+
+
+@pytest.fixture
+def sealed(tmp_path):
+    path = tmp_path / "thing.bin"
+    body = bytes(range(256)) * 4096                   # a megabyte, as a small library
+    user_cache.keep(path, TAG, DIGEST, body)
+    return path, body
+
+
+def test_a_sealed_file_is_trusted_and_intact(sealed):
+    path, body = sealed
+    assert user_cache.trusted(path, TAG, DIGEST) == body
+    assert user_cache.intact(path, TAG, DIGEST)
+    assert oct(path.stat().st_mode & 0o777) == oct(0o600)
+
+
+@pytest.mark.parametrize("spoil", ["bit", "short", "digest", "tag", "empty", "writable"])
+def test_a_spoiled_file_is_refused_by_both(sealed, spoil):
+    path, body = sealed
+    data = bytearray(path.read_bytes())
+    digest, tag = DIGEST, TAG
+    if spoil == "bit":
+        data[len(data) // 3] ^= 1
+    elif spoil == "short":
+        data = data[:len(data) // 2] + data[-200:]
+    elif spoil == "digest":
+        digest = "e" * 64
+    elif spoil == "tag":
+        tag = "optdesign-other"
+    elif spoil == "empty":
+        data = bytearray()
+    path.write_bytes(bytes(data))
+    if spoil == "writable":
+        os.chmod(path, 0o622)
+    assert user_cache.trusted(path, tag, digest) is None
+    assert not user_cache.intact(path, tag, digest)
+
+
+def test_a_link_is_not_followed(sealed, tmp_path):
+    """A link planted under a kept file's name, even to a good file of the user's own."""
+    path, _ = sealed
+    link = tmp_path / "link.bin"
+    link.symlink_to(path)
+    assert user_cache.trusted(link, TAG, DIGEST) is None
+    assert not user_cache.intact(link, TAG, DIGEST)
+
+
+def test_a_pipe_is_refused_without_waiting_for_a_writer(tmp_path):
+    pipe = tmp_path / "pipe.bin"
+    os.mkfifo(pipe, 0o600)
+    answers = []
+    thread = threading.Thread(target=lambda: answers.extend(
+        [user_cache.intact(pipe, TAG, DIGEST), user_cache.trusted(pipe, TAG, DIGEST)]),
+        daemon=True)
+    thread.start()
+    thread.join(10)
+    assert answers == [False, None]
+
+
+def test_a_missing_file_is_refused(tmp_path):
+    assert user_cache.trusted(tmp_path / "none", TAG, DIGEST) is None
+    assert not user_cache.intact(tmp_path / "none", TAG, DIGEST)

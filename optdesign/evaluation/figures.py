@@ -259,19 +259,21 @@ def forget() -> None:
 def _worst_of(problem, design: Design) -> RangeWorst:
     """:func:`~optdesign.evaluation.regulation.worst_over_range` of ``design`` over the problem's
     interval, remembered for the last few designs."""
-    key = _worst_key(problem, design)
+    quantities = interval_quantities(problem)
+    key = _worst_key(problem, design, quantities)
     worst = _WORST_CACHE.get(key)
     if worst is None:
         worst = worst_over_range(design, problem.stroke, problem.input_speed,
                                  problem.objective.ripple, *problem.eccentricity_range,
-                                 quantities=interval_quantities(problem))
+                                 quantities=quantities)
         keep(_WORST_CACHE, _WORST_CACHE_SIZE, key, worst)
     return worst
 
 
-def _worst_key(problem, design: Design) -> tuple:
-    """What :data:`_WORST_CACHE` keeps ``design``'s search over ``problem``'s interval under."""
+def _worst_key(problem, design: Design, quantities=None) -> tuple:
+    """What :data:`_WORST_CACHE` keeps ``design``'s search over ``problem``'s interval under
+    (``quantities``: the problem's :func:`interval_quantities`, when found already)."""
     return (problem.mechanism, problem.stroke, problem.input_speed, problem.objective.ripple,
             problem.eccentricity_range, tuple(sorted(problem.options.items())),
             tuple(sorted((k, float(v)) for k, v in design.values.items())),
-            interval_quantities(problem))
+            interval_quantities(problem) if quantities is None else quantities)

@@ -114,7 +114,10 @@ def intact(path: Path, tag: str, digest: str) -> bool:
 def _sealed(path: Path, tag: str, digest: str):
     """Inside, a view of the bytes of ``path`` before its trailer (the file mapped, read
     only), or None where it is not to be trusted (:func:`trusted`). Opened without following
-    a link or waiting on a pipe, then asked what it is: the file checked is the file read."""
+    a link or waiting on a pipe, then asked what it is: the file checked is the file read.
+    (A file cut short in place while it is mapped would fault the process, as would the
+    library CasADi maps after the check: the cache's files are only ever replaced whole,
+    by a rename, which leaves a mapped file as it was.)"""
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
     except OSError:

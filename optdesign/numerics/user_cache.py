@@ -130,17 +130,15 @@ def _sealed(path: Path, tag: str, digest: str):
             yield None
             return
         size = trailer_bytes(tag)
-        if st.st_size <= size:
-            log.debug("%s is corrupt or was made from something else: ignored", path)
-            yield None
-            return
-        with mmap.mmap(fd, 0, access=mmap.ACCESS_READ) as mapped, \
-                memoryview(mapped) as whole, whole[:-size] as body, whole[-size:] as end:
-            if end != trailer(tag, digest, body):
-                log.debug("%s is corrupt or was made from something else: ignored", path)
-                yield None
-            else:
-                yield body
+        if st.st_size > size:
+            with mmap.mmap(fd, 0, access=mmap.ACCESS_READ) as mapped, \
+                    memoryview(mapped) as whole, whole[:-size] as body, \
+                    whole[-size:] as end:
+                if end == trailer(tag, digest, body):
+                    yield body
+                    return
+        log.debug("%s is corrupt or was made from something else: ignored", path)
+        yield None
     finally:
         os.close(fd)
 

@@ -7,7 +7,8 @@ import pytest
 
 from optdesign import mechanisms
 from optdesign.evaluation.design import Design
-from optdesign.envelope.sampled import driving_speeds, output_envelope, sampled_figures
+from optdesign.envelope.sampled import (STROKE_SIGNS, driving_speeds, output_envelope,
+                                       sampled_figures)
 from optdesign.envelope.exact import exact_figures
 from optdesign.mechanisms.base import Mechanism, VariableSpec
 
@@ -106,3 +107,19 @@ def test_driving_speeds_are_the_rocker_speeds_signed_per_stroke():
     assert np.array_equal(driving_speeds(dtheta, "forward"), dtheta)
     assert np.array_equal(driving_speeds(dtheta, "reverse"), -dtheta)
     assert np.array_equal(driving_speeds(dtheta, "both"), np.vstack([dtheta, -dtheta]))
+
+
+def test_signed_speeds_are_the_stacked_products_to_the_bit():
+    """Each sign's rows written into one array are the products a stack of them holds, to
+    the bit: a NaN (a design that does not assemble) keeps its bits, a single curve is one
+    row, and the dtype is the product's."""
+    rng = np.random.default_rng(3)
+    dtheta = rng.normal(size=(5, 7))
+    dtheta[1, 2], dtheta[3, 4] = np.nan, -np.nan
+    for stroke in ("reverse", "both"):
+        stacked = np.vstack([s * dtheta for s in STROKE_SIGNS[stroke]])
+        assert driving_speeds(dtheta, stroke).view(np.uint64).tolist() == \
+            stacked.view(np.uint64).tolist()
+        assert driving_speeds(dtheta[0], stroke).shape == (len(STROKE_SIGNS[stroke]), 7)
+        single = dtheta.astype(np.float32)
+        assert driving_speeds(single, stroke).dtype == np.float32

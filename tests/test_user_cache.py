@@ -1,6 +1,7 @@
 """The files of the user's cache a process may trust (optdesign.numerics.user_cache): the
 checks made on the file where it lies, mapped (intact) or read (trusted), agree; a link, a
 pipe, a file cut short or changed, another's and one made from something else are refused."""
+import logging
 import os
 import threading
 
@@ -48,25 +49,30 @@ def test_a_spoiled_file_is_refused_by_both(sealed, spoil):
     assert not user_cache.intact(path, tag, digest)
 
 
-def test_a_link_is_not_followed(sealed, tmp_path):
-    """A link planted under a kept file's name, even to a good file of the user's own."""
+def test_a_link_is_not_followed_and_says_why(sealed, tmp_path, caplog):
+    """A link planted under a kept file's name, even to a good file of the user's own
+    (``--debug`` says why the file is passed over)."""
     path, _ = sealed
     link = tmp_path / "link.bin"
     link.symlink_to(path)
-    assert user_cache.trusted(link, TAG, DIGEST) is None
-    assert not user_cache.intact(link, TAG, DIGEST)
+    with caplog.at_level(logging.DEBUG, logger="optdesign.cache"):
+        assert user_cache.trusted(link, TAG, DIGEST) is None
+        assert not user_cache.intact(link, TAG, DIGEST)
+    assert caplog.messages == [f"{link} is a link: ignored"] * 2
 
 
-def test_a_pipe_is_refused_without_waiting_for_a_writer(tmp_path):
+def test_a_pipe_is_refused_without_waiting_for_a_writer(tmp_path, caplog):
     pipe = tmp_path / "pipe.bin"
     os.mkfifo(pipe, 0o600)
     answers = []
     thread = threading.Thread(target=lambda: answers.extend(
         [user_cache.intact(pipe, TAG, DIGEST), user_cache.trusted(pipe, TAG, DIGEST)]),
         daemon=True)
-    thread.start()
-    thread.join(10)
+    with caplog.at_level(logging.DEBUG, logger="optdesign.cache"):
+        thread.start()
+        thread.join(10)
     assert answers == [False, None]
+    assert caplog.messages == [f"{pipe} is not a regular file: ignored"] * 2
 
 
 def test_a_missing_file_is_refused(tmp_path):

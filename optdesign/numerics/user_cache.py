@@ -120,12 +120,21 @@ def _sealed(path: Path, tag: str, digest: str):
     by a rename, which leaves a mapped file as it was.)"""
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
-    except OSError:
+    except FileNotFoundError:
+        yield None
+        return
+    except OSError as exc:          # a link (ELOOP), or a file this user may not read
+        log.debug("%s is %s: ignored", path, "a link" if os.path.islink(path)
+                  else f"not to be opened ({exc.strerror})")
         yield None
         return
     try:
         st = os.fstat(fd)
-        if not stat.S_ISREG(st.st_mode) or st.st_uid != os.getuid() or st.st_mode & 0o022:
+        if not stat.S_ISREG(st.st_mode):
+            log.debug("%s is not a regular file: ignored", path)
+            yield None
+            return
+        if st.st_uid != os.getuid() or st.st_mode & 0o022:
             log.debug("%s is not this user's own or others may write it: ignored", path)
             yield None
             return

@@ -146,12 +146,7 @@ class Key:
             return reader.text(value, path) if self.upper is None else \
                 reader.text(value, path, limit=int(self.upper))
         if self.kind == "choice":
-            text = reader.text(value, path)
-            allowed = self.allowed()
-            if text not in allowed:
-                raise reader.error(path, f"must be one of {', '.join(map(str, allowed))} "
-                                         f"(got {text!r})")
-            return text
+            return reader.choice(value, path, self.allowed())
         raise TypeError(f"key {self.name!r} of kind {self.kind} has no generic reader")
 
     def _in_range(self, reader, number: float, path: str) -> float:

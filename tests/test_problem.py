@@ -47,9 +47,18 @@ BAD = [
     (design(l9=3), r"p\.yaml: design\.l9 is not a known key; known: l0, l1, l2"),
     (design(l1=300), r"p\.yaml: design\.l1 must be shorter than l0"),
     (base_problem(mechanism="cam"),
-     r"p\.yaml: mechanism unknown mechanism 'cam'; known: .*fourbar_converter"),
+     r"p\.yaml: mechanism must be one of fourbar_converter, pulse_reducer, slotted_lever "
+     r"\(got 'cam'\)$"),
+    (base_problem(mechanism="fourbar_convertor"),
+     r"p\.yaml: mechanism must be one of .* \(got 'fourbar_convertor'; did you mean "
+     r"fourbar_converter\?\)$"),
     (base_problem(stroke="sideways"),
-     r"p\.yaml: stroke must be one of forward, reverse \(got 'sideways'\)"),
+     r"p\.yaml: stroke must be one of forward, reverse \(got 'sideways'\)$"),
+    (base_problem(stroke="Forward"),
+     r"p\.yaml: stroke must be one of forward, reverse \(got 'Forward'; did you mean "
+     r"forward\?\)$"),
+    (base_problem(options={"branch": "lefft"}),
+     r"options\.branch must be one of left, right \(got 'lefft'; did you mean left\?\)"),
     (base_problem(input_speed=-1), r"p\.yaml: input_speed must be positive"),
     (base_problem(colour="red"), r"p\.yaml: colour is not a known key"),
     (base_problem(objective={"ripple": "rms"}), r"objective\.ripple must be one of midrange, mean"),

@@ -261,10 +261,7 @@ def _one(r: Reader, value, key: str, name: str, model):
         spec = next(v for v in model.variables if v.name == model.count_variable)
         return r.integer(value, key, int(spec.minimum), MAX_COUNT)
     if name == "stroke":
-        text = r.text(value, key)
-        if text not in model.strokes:
-            raise r.error(key, f"must be one of {', '.join(model.strokes)} (got {text!r})")
-        return text
+        return r.choice(value, key, model.strokes)
     number = r.number(value, key)
     if number < 0:
         raise r.error(key, f"must not be negative (got {number:g})")

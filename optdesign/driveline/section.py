@@ -382,12 +382,9 @@ def _read_straightness(raw, reader, length_mm) -> tuple[float, str]:
         raise reader.error("y0_max_mm", "cannot be given with straightness_class; give one")
     if "y0_max_mm" in raw:
         return reader.number(raw["y0_max_mm"], "y0_max_mm", positive=True) * 1e-3, "given"
-    name = reader.text(raw.get("straightness_class", DEFAULT_STRAIGHTNESS_CLASS),
-                       "straightness_class")
     classes = model.GOST_5005_STRAIGHTNESS_MM_PER_M
-    if name not in classes:
-        raise reader.error("straightness_class", f"must be one of {', '.join(classes)} "
-                                                 f"(got {name!r})")
+    name = reader.choice(raw.get("straightness_class", DEFAULT_STRAIGHTNESS_CLASS),
+                         "straightness_class", list(classes))
     per_metre = classes[name]
     return (model.initial_deflection(length_mm * 1e-3, per_metre),
             f"GOST 5005-82 {name}: {per_metre:g} mm/m")

@@ -232,9 +232,7 @@ def parse_section(raw, reader) -> DynamicsSection:
     for key, choices in (("freewheel", FREEWHEEL_MODELS), ("crank", CRANK_MODELS),
                          ("method", METHODS)):
         if key in raw:
-            kw[key] = reader.text(raw[key], key)
-            if kw[key] not in choices:
-                raise reader.error(key, f"must be one of {', '.join(choices)} (got {kw[key]!r})")
+            kw[key] = reader.choice(raw[key], key, choices)
     return DynamicsSection(**kw)
 
 

@@ -528,17 +528,12 @@ def problem_from_dict(data: Any, where: str = "<dict>", default_name: str = "pro
     name = _read_name(r, top.get("name", default_name))
     if "mechanism" not in top:
         raise r.error("mechanism", "is required")
-    mechanism_name = r.text(top["mechanism"], "mechanism")
-    try:
-        mech = get_mechanism(mechanism_name)
-    except ProblemError as exc:
-        raise r.error("mechanism", str(exc)) from None
+    mechanism_name = r.choice(top["mechanism"], "mechanism", known())
+    mech = get_mechanism(mechanism_name)
     if "input_speed" not in top:
         raise r.error("input_speed", "is required (crank speed ω1, rad/s)")
     input_speed = r.number(top["input_speed"], "input_speed", positive=True)
-    stroke = r.text(top.get("stroke", "forward"), "stroke")
-    if stroke not in mech.strokes:
-        raise r.error("stroke", f"must be one of {', '.join(mech.strokes)} (got {stroke!r})")
+    stroke = r.choice(top.get("stroke", "forward"), "stroke", mech.strokes)
 
     design = _read_design(r, top, mech)
     options = _read_options(r, top.get("options", {}), mech)
@@ -752,11 +747,7 @@ def _read_options(r, raw, mech) -> dict[str, str]:
     r.known_keys(raw, "options", set(specs))
     options = mech.default_options()
     for k, v in raw.items():
-        v = r.text(v, f"options.{k}")
-        if v not in specs[k].choices:
-            raise r.error(f"options.{k}", f"must be one of {', '.join(specs[k].choices)} "
-                                          f"(got {v!r})")
-        options[k] = v
+        options[k] = r.choice(v, f"options.{k}", specs[k].choices)
     return options
 
 
@@ -915,6 +906,17 @@ class Reader:
             if not isinstance(k, str):
                 raise self.error(key, f"has a key that is not text: {shown(k)}")
         return dict(value)
+
+    def choice(self, value, key: str, choices) -> str:
+        """Text that is one of ``choices``; else the error lists them and suggests the one
+        most likely meant (a misspelling, another case)."""
+        text = self.text(value, key)
+        if text not in choices:
+            hint = suggestion(text, {str(c) for c in choices})
+            hint = f"; did you mean {hint}?" if hint else ""
+            raise self.error(key, f"must be one of {', '.join(map(str, choices))} "
+                                  f"(got {text!r}{hint})")
+        return text
 
     def known_keys(self, value: Mapping, key: str, allowed: set[str]) -> None:
         """Every key of ``value`` in ``allowed``; else the error names the key, suggests the

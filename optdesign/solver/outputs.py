@@ -11,7 +11,8 @@ from optdesign.quantities.criteria import (LengthConstraint, constraints_of, obj
 def summary_text(result, problem) -> str:
     """A short plain-text account of a solve, for the terminal and summary.txt."""
 
-    lines = [f"{problem.name}: {result.status} ({problem.mechanism}, {problem.stroke} stroke, "
+    strokes = "both strokes" if problem.stroke == "both" else f"{problem.stroke} stroke"
+    lines = [f"{problem.name}: {result.status} ({problem.mechanism}, {strokes}, "
              f"{input_speed_text(problem.input_speed)})"]
     lines += least_count_lines(result.least_count, problem.model.count_variable)
     if result.design:
@@ -53,7 +54,8 @@ def summary_text(result, problem) -> str:
         if p.status == "optimal":
             gap = f"{p.surrogate_gap:+.1e}" if p.surrogate_gap is not None else "n/a"
             lines.append(f"  n = {p.count}: {p.status}, δ = {p.delta:.6f}, ratio = "
-                         f"{p.ratio:.4f}, surrogate gap {gap}, {len(p.starts)} starts")
+                         f"{p.ratio:.4f}, surrogate gap {gap}, {len(p.starts)} "
+                         f"start{'' if len(p.starts) == 1 else 's'}")
         else:
             lines.append(f"  n = {p.count}: {p.status}: {p.message}")
     lines.append("every figure above is the exact evaluator's, not the NLP surrogate's")

@@ -174,7 +174,8 @@ def remember(problem, evaluation: Evaluation) -> None:
                              known.eccentricity, strokes, evaluation.n_grid)
         keep(_EVALUATED, _EVALUATED_SIZE, key, known)
     if evaluation.worst is not None and evaluation.worst_definition == problem.objective.ripple:
-        keep(_WORST_CACHE, _WORST_CACHE_SIZE, _worst_key(problem, design), evaluation.worst)
+        keep(_WORST_CACHE, _WORST_CACHE_SIZE,
+             _worst_key(problem, design, interval_quantities(problem)), evaluation.worst)
 
 
 def _evaluate_at(design: Design, stroke: str, input_speed: float, e: float,
@@ -270,10 +271,9 @@ def _worst_of(problem, design: Design) -> RangeWorst:
     return worst
 
 
-def _worst_key(problem, design: Design, quantities=None) -> tuple:
-    """What :data:`_WORST_CACHE` keeps ``design``'s search over ``problem``'s interval under
-    (``quantities``: the problem's :func:`interval_quantities`, when found already)."""
+def _worst_key(problem, design: Design, quantities) -> tuple:
+    """What :data:`_WORST_CACHE` keeps ``design``'s search over ``problem``'s interval for
+    ``quantities`` (the problem's :func:`interval_quantities`) under."""
     return (problem.mechanism, problem.stroke, problem.input_speed, problem.objective.ripple,
             problem.eccentricity_range, tuple(sorted(problem.options.items())),
-            tuple(sorted((k, float(v)) for k, v in design.values.items())),
-            interval_quantities(problem) if quantities is None else quantities)
+            tuple(sorted((k, float(v)) for k, v in design.values.items())), quantities)

@@ -327,10 +327,7 @@ class Beside:
         that shares much of this one's memory takes milliseconds): multiprocessing reaps it
         as the next child starts, or as this process exits."""
         self.receive.close()
-        if wait:
-            self.child.join()
-        else:
-            self.child.join(0)
+        self.child.join(None if wait else 0)
         self.child = None
 
 

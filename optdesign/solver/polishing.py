@@ -13,6 +13,7 @@ from contextlib import nullcontext
 from functools import partial
 
 from optdesign.evaluation.design import Design
+from optdesign import lifetime
 from optdesign.evaluation.figures import eccentricities_of, remember
 from optdesign.numerics import lanes
 from optdesign.quantities import design_quantities
@@ -259,10 +260,8 @@ class Polishing:
     def _polish_ahead(self, values: dict):
         """:meth:`polish` of ``values`` with what the solve knows now, begun in a process
         forked beside this one (:func:`optdesign.lifetime.beside`)."""
-        from optdesign.lifetime import beside
-
-        return beside(_polish_here, self.solver, values, [o.values for o in self.optima],
-                      self.converged())
+        return lifetime.beside(_polish_here, self.solver, values,
+                               [o.values for o in self.optima], self.converged())
 
     def _record_made(self, outcome: Outcome, timings: Timings, built_slots=(),
                      beside: bool = False) -> Outcome:
@@ -360,10 +359,9 @@ def _head_beside(problem, count: int, starts: list[dict], checks_in_parallel: bo
     outcome and stage times (computed here if its process is lost). The same polish as in
     this process, on the same memory: the outcome is the same to the bit. The first also
     checks ``checks`` as they are, once its polish is done."""
-    from optdesign.lifetime import beside
-
-    return [beside(_polish_here, _of_its_own(problem, count, checks_in_parallel), values, [],
-                   True, checks if k == 0 else ()) for k, values in enumerate(starts)]
+    return [lifetime.beside(_polish_here, _of_its_own(problem, count, checks_in_parallel),
+                            values, [], True, checks if k == 0 else ())
+            for k, values in enumerate(starts)]
 
 
 def _polish_here(solver: "PhaseSolver", values: dict, avoid: list[dict], secondary: bool,

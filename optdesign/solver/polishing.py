@@ -21,7 +21,7 @@ from optdesign.solver.accuracy import refined_figures
 from optdesign.solver.phase_solver import (AS_IT_IS, EXHAUSTED, JOINED, STALLED, SUCCESS,
                                            Outcome, PhaseSolver, Timings)
 from optdesign.solver.result import PhaseResult, StartRecord
-from optdesign.solver.screening import line_seeds
+from optdesign.solver.screening import LineScreening
 from optdesign.solver.verify import Verification
 
 #: two polished optima are one basin when their designs differ by less than this (relative
@@ -51,8 +51,8 @@ class Polishing:
         #: quantities; refined for the accuracy record, should it be the solve's answer:
         #: :func:`~optdesign.solver.accuracy.solve_accuracy`), not a nominal problem's
         self.records_later = False
-        #: the line screening through the design it was made for (:meth:`_line_seeds`)
-        self._lines: dict = {}
+        #: the line screening through the last design it was asked for (:meth:`_lines_through`)
+        self._lines: LineScreening | None = None
 
     def polish(self, values: dict, ver: Verification | None = None) -> Outcome:
         """IPOPT from ``values`` (its start's check ``ver``, when done already), recorded: a
@@ -220,30 +220,42 @@ class Polishing:
         exact check of each design a later step checks as it is that no process beside took
         (:attr:`checked_later`, kept in the evaluator's memory of checked designs); then, for
         the best optimum so far, the line screening through it (:meth:`lines`, kept for the
-        design it was made for) and, with :attr:`records_later`, its figures on the accuracy
-        record's finer grid at each eccentricity (kept in the evaluator's memory) and its
-        quantities (their maxima over the turn kept by each quantity): each used where that
+        design it was made for; a line at a time, so that a wait ends within a line's
+        screening and the lines left share the cores) and, with :attr:`records_later`, its
+        figures on the accuracy record's finer grid at each eccentricity (kept in the
+        evaluator's memory) and its quantities (their maxima over the turn kept by each quantity): each used where that
         optimum is still the best when they are asked for."""
         while self.checked_later:
             yield partial(self.solver.as_it_is, self.checked_later.pop(0))
         if self.best is None:
             return
         if self.polished < self.problem.solver.starts:
-            yield partial(self._line_seeds, self.best.values)
+            screening = self._lines_through(self.best.values)
+            for _ in range(screening.remaining):
+                yield partial(self._line_step, screening)
         if self.records_later:
             design = Design.from_problem(self.problem, self.best.values)
             for e in eccentricities_of(self.problem):
                 yield partial(self._refined, design, e)
             yield partial(design_quantities, self.problem, self.best.verification.evaluation)
 
+    def _lines_through(self, values: dict) -> LineScreening:
+        """The :class:`~optdesign.solver.screening.LineScreening` through ``values``, made once
+        for the last design asked for (the lines screened so far kept)."""
+        if self._lines is None or self._lines.through != tuple(sorted(values.items())):
+            self._lines = LineScreening(self.problem, self.count, values)
+        return self._lines
+
+    def _line_step(self, screening: LineScreening) -> None:
+        """One more line of ``screening`` (:meth:`_while_waiting`)."""
+        with self.solver.timings.stage("screening"):
+            screening.step()
+
     def _line_seeds(self, values: dict) -> list:
-        """:func:`~optdesign.solver.screening.line_seeds` through ``values``, made once for
-        the last design asked for."""
-        key = tuple(sorted(values.items()))
-        if key not in self._lines:
-            with self.solver.timings.stage("screening"):
-                self._lines = {key: line_seeds(self.problem, self.count, values)}
-        return self._lines[key]
+        """The line screening's seeds through ``values``, its lines not screened yet
+        screened now."""
+        with self.solver.timings.stage("screening"):
+            return self._lines_through(values).seeds()
 
     def _refined(self, design, e: float) -> None:
         """``design``'s figures at ``e`` on the accuracy record's finer grid, made ahead

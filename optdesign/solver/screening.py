@@ -596,45 +596,83 @@ LINE_POINTS = 64
 
 
 def line_seeds(problem, count: int, values: dict) -> list[Candidate]:
-    """Basins beside an optimum along each free length that is not on a bound.
+    """Basins beside an optimum along each free length that is not on a bound
+    (:class:`LineScreening`, every line at once)."""
+    return LineScreening(problem, count, values).seeds()
 
-    The box is screened again on lines through ``values``, one per free length inside its
-    bounds (the others held, so the bounds the optimum rests on stay active; evenly spaced as
-    the box's sample is, in the logarithm of a range of decades): the local
-    minima of the sampled objective along each line, among the designs that pass the filters
-    and away from the optimum itself, best first. A narrow basin next to the optimum's face,
-    which a sample of the whole box steps over, is found this way.
-    """
-    free = problem.free_lengths()
-    base = problem.start_values() | {problem.model.count_variable: count}
-    centre = np.array([values[k] for k in free], dtype=float)
-    lower = np.array([problem.design[k].lower for k in free])
-    upper = np.array([problem.design[k].upper for k in free])
-    span = upper - lower
-    lines = [j for j in range(len(free))
-             if min(centre[j] - lower[j], upper[j] - centre[j]) > 1e-6 * span[j]]
-    # every line's designs in one call: each row is evaluated on its own, so its figures are
-    # those of a call per line, and one call's lanes are enough to share between threads
-    line = np.linspace(0.0, 1.0, LINE_POINTS)
-    rows = np.tile(centre, (LINE_POINTS * len(lines), 1))
-    for at, j in enumerate(lines):
-        rows[at * LINE_POINTS:(at + 1) * LINE_POINTS, j] = \
-            spread(line[:, None], lower[j:j + 1], upper[j:j + 1])[:, 0]
-    scores, violations = sampled_scores(problem, count, base, free, rows) if lines else ((), ())
-    out = []
-    for at, j in enumerate(lines):
-        part = slice(at * LINE_POINTS, (at + 1) * LINE_POINTS)
-        X, score, violation = rows[part], scores[part], violations[part]
-        ok = violation <= 0
-        s = np.where(ok, score, np.inf)
-        unit = unit_of(X, lower, upper)
-        here = unit_of(centre[None, :], lower, upper)[0, j]
+
+class LineScreening:
+    """The box screened again on lines through an optimum ``values``, one per free length
+    inside its bounds (the others held, so the bounds the optimum rests on stay active; evenly
+    spaced as the box's sample is, in the logarithm of a range of decades): the local minima
+    of the sampled objective along each line, among the designs that pass the filters and
+    away from the optimum itself, best first (:meth:`seeds`). A narrow basin next to the
+    optimum's face, which a sample of the whole box steps over, is found this way.
+
+    Each design is evaluated on its own, so the lines may be screened one at a time
+    (:meth:`step`, where a core waits for a polish beside) and the rest at once: the seeds are
+    the same to the bit."""
+
+    def __init__(self, problem, count: int, values: dict):
+        self.problem, self.count = problem, count
+        self.through = tuple(sorted(values.items()))    # the design the lines pass through
+        self.free = problem.free_lengths()
+        self.base = problem.start_values() | {problem.model.count_variable: count}
+        self.centre = np.array([values[k] for k in self.free], dtype=float)
+        self.lower = np.array([problem.design[k].lower for k in self.free])
+        self.upper = np.array([problem.design[k].upper for k in self.free])
+        span = self.upper - self.lower
+        self.lines = [j for j in range(len(self.free))
+                      if min(self.centre[j] - self.lower[j],
+                             self.upper[j] - self.centre[j]) > 1e-6 * span[j]]
+        line = np.linspace(0.0, 1.0, LINE_POINTS)
+        self.rows = np.tile(self.centre, (LINE_POINTS * len(self.lines), 1))
+        for at, j in enumerate(self.lines):
+            self.rows[at * LINE_POINTS:(at + 1) * LINE_POINTS, j] = \
+                spread(line[:, None], self.lower[j:j + 1], self.upper[j:j + 1])[:, 0]
+        self.scores = np.empty(len(self.rows))
+        self.violations = np.empty(len(self.rows))
+        self.screened = 0           # rows screened so far, line by line
+        self._seeds: list[Candidate] | None = None
+
+    @property
+    def remaining(self) -> int:
+        """Lines not screened yet."""
+        return (len(self.rows) - self.screened) // LINE_POINTS
+
+    def step(self) -> None:
+        """Screen the next line."""
+        self._screen(self.screened + LINE_POINTS)
+
+    def _screen(self, end: int) -> None:
+        """Screen the rows up to ``end`` not screened yet, in one call (its lanes shared
+        between threads where the caller owns the cores)."""
+        part = slice(self.screened, end)
+        if end > self.screened:
+            self.scores[part], self.violations[part] = sampled_scores(
+                self.problem, self.count, self.base, self.free, self.rows[part])
+        self.screened = end
+
+    def seeds(self) -> list[Candidate]:
+        """The local minima of every line, best first (the lines not screened yet screened
+        first, in one call)."""
+        if self._seeds is not None:
+            return self._seeds
+        self._screen(len(self.rows))
+        out = []
         step = 1.0 / (LINE_POINTS - 1)
-        for i in range(LINE_POINTS):
-            left = s[i - 1] if i > 0 else np.inf
-            right = s[i + 1] if i < LINE_POINTS - 1 else np.inf
-            if ok[i] and s[i] <= left and s[i] <= right and \
-                    abs(unit[i, j] - here) > 2 * step:
-                out.append(Candidate(base | dict(zip(free, X[i])), float(s[i]), True,
-                                     unit[i], float(s[i])))
-    return sorted(out, key=lambda c: c.score)
+        for at, j in enumerate(self.lines):
+            part = slice(at * LINE_POINTS, (at + 1) * LINE_POINTS)
+            X, ok = self.rows[part], self.violations[part] <= 0
+            s = np.where(ok, self.scores[part], np.inf)
+            unit = unit_of(X, self.lower, self.upper)
+            here = unit_of(self.centre[None, :], self.lower, self.upper)[0, j]
+            for i in range(LINE_POINTS):
+                left = s[i - 1] if i > 0 else np.inf
+                right = s[i + 1] if i < LINE_POINTS - 1 else np.inf
+                if ok[i] and s[i] <= left and s[i] <= right and \
+                        abs(unit[i, j] - here) > 2 * step:
+                    out.append(Candidate(self.base | dict(zip(self.free, X[i])), float(s[i]),
+                                         True, unit[i], float(s[i])))
+        self._seeds = sorted(out, key=lambda c: c.score)
+        return self._seeds

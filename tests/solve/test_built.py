@@ -9,6 +9,7 @@ from optdesign.evaluation import figures
 from optdesign.problem.loader import load_problem, problem_from_dict
 from optdesign.solver import built, phase_solver, polishing, solve
 from optdesign.solver.nlp import PhaseNLP
+from optdesign.solver.screening import LineScreening
 from tests.conftest import ROOT, file_data
 
 VERGOV = ROOT / "problems" / "vergov_solve.yaml"
@@ -231,10 +232,11 @@ def test_a_further_basin_begun_with_stale_knowledge_is_polished_again_here(
 def test_a_wait_for_a_polish_beside_makes_what_the_solve_asks_for_later(
         fresh, logged_polishes, monkeypatch):
     """While the solving process waits for a polish beside it (here: every wait, as long as
-    there is something to make), it screens the lines through the best optimum so far,
-    refines it for the accuracy record and finds its quantities; the later steps find them made (on the housing
-    problem the first polish's optimum stays the best). Every record, the accuracy record
-    and the answer are the one-worker solve's, to the bit."""
+    there is something to make), it screens the lines through the best optimum so far (a
+    line at a time), refines it for the accuracy record and finds its quantities; the later
+    steps find them made (on the housing problem the first polish's optimum stays the best).
+    Every record, the accuracy record and the answer are the one-worker solve's, to the
+    bit."""
     from optdesign import lifetime
 
     made = []
@@ -245,29 +247,33 @@ def test_a_wait_for_a_polish_beside_makes_what_the_solve_asks_for_later(
             made.append(piece.func.__name__)
             yield piece
 
-    def counted(name, function):
-        def call(*args, **kwargs):
-            if name == "lines" or "n_grid" in kwargs:       # a refinement, not a check
-                calls.append(name)
-            return function(*args, **kwargs)
-        return call
+    def refined(*args, **kwargs):
+        if "n_grid" in kwargs:       # a refinement, not a check
+            calls.append("refined")
+        return exact_figures(*args, **kwargs)
+
+    def lines_screened(self, end):
+        calls.extend(("line row", self.through, row) for row in range(self.screened, end))
+        return screen_rows(self, end)
 
     calls = []
+    exact_figures, screen_rows = figures.exact_figures, LineScreening._screen
     monkeypatch.setattr(lifetime.Beside, "ready", lambda self: False)
     monkeypatch.setattr(polishing.Polishing, "_while_waiting", logged)
-    monkeypatch.setattr(polishing, "line_seeds", counted("lines", polishing.line_seeds))
-    monkeypatch.setattr(figures, "exact_figures", counted("refined", figures.exact_figures))
+    monkeypatch.setattr(LineScreening, "_screen", lines_screened)
+    monkeypatch.setattr(figures, "exact_figures", refined)
     figures.forget()
     two, _ = logged_polishes("housing_disc", 2)
-    assert {"_line_seeds", "_refined", "design_quantities"} <= set(made)
+    assert {"_line_step", "_refined", "design_quantities"} <= set(made)
     made_ahead, calls = calls, []
     figures.forget()
     one, _ = logged_polishes("housing_disc", 1)
     assert answer(two) == answer(one) and _records(two) == _records(one)
     assert two.accuracy == one.accuracy
     assert [p.quantities for p in two.per_phase] == [p.quantities for p in one.per_phase]
-    # made once, ahead: no line screening nor refinement was made twice for one design
-    assert made_ahead == calls
+    # made once, ahead (the lines one at a time): no row of a line screening nor a
+    # refinement was made twice for one design
+    assert made_ahead == calls and "line row" in {c[0] for c in calls if c != "refined"}
 
 
 def test_the_files_own_design_is_checked_beside_once_its_polish_is_done(

@@ -206,6 +206,15 @@ class Held:
 #: n = 4: 100 iterations, then 13 more with the exact Hessian to join the best basin)
 STALL_AFTER = 30
 STALL_INFEASIBILITY = 1e-2
+#: the least a tracked extreme of cos μ may move in one run, either way (rad). A chain's two
+#: extremes lie about half a turn apart (the four-bar's cos μ is a function of cos φ about its
+#: frame line: its extremes at φ = 0 and π of that line), however many curves the count makes,
+#: so their window need not shrink with the curve spacing below this as the peaks' and
+#: hand-overs' do (three spacings: 45° at 12 phases, where this leaves every window of 12
+#: phases and fewer as it was): at 24 phases a window of 22.5° stopped the second basin's run of
+#: the disc problem on its edge (its extreme moved 37°), and the re-solve from there took 23
+#: iterations more (the solve's 50 in all, not 70)
+MU_MIN_HALF_WINDOW = math.pi / 4
 #: iterations a secondary basin's polish may take (the best-ranked basin has IPOPT's own
 #: limit): one that has not converged by then creeps along a slow valley of a worse basin
 #: (disc problem, n = 12: 100 L-BFGS iterations to end 1 % above the best optimum)
@@ -784,10 +793,11 @@ class PhaseNLP:
         sl = L.find(L.x, "lengths")
         lbx[sl] = [P.design[k].lower / s for k, s in zip(self.free, self.scale)]
         ubx[sl] = [P.design[k].upper / s for k, s in zip(self.free, self.scale)]
-        # Each tracked angle may move 3 curve spacings' worth (at most 60°): far enough that
-        # a polish from a distant seed rarely runs into a window edge (each edge costs a
-        # re-solve), near enough that a peak's point cannot reach the same curve's minimum
-        # (about half a turn away), nor a hand-over the pair's other crossing.
+        # Each tracked peak and hand-over may move 3 curve spacings' worth (at most 60°): far
+        # enough that a polish from a distant seed rarely runs into a window edge (each edge
+        # costs a re-solve), near enough that a peak's point cannot reach the same curve's
+        # minimum (about half a turn away), nor a hand-over the pair's other crossing; an
+        # extreme of cos μ at least 45° (MU_MIN_HALF_WINDOW).
         half_window = min(3 * math.pi / self.n_curves, math.pi / 3)
         for tag, seq in zip(self.tags, sequences):
             sl = L.find(L.x, f"phi_peak_{tag}")
@@ -795,8 +805,9 @@ class PhaseNLP:
                 guess[f"phi_peak_{tag}"] + half_window
             if self.has_mu:
                 sl = L.find(L.x, f"phi_mu_{tag}")
-                lbx[sl], ubx[sl] = guess[f"phi_mu_{tag}"] - half_window, \
-                    guess[f"phi_mu_{tag}"] + half_window
+                mu_window = max(half_window, MU_MIN_HALF_WINDOW)
+                lbx[sl], ubx[sl] = guess[f"phi_mu_{tag}"] - mu_window, \
+                    guess[f"phi_mu_{tag}"] + mu_window
             sl = L.find(L.x, f"phi_handover_{tag}")
             centre = guess[f"phi_handover_{tag}"]
             active = np.arange(self.slots) < len(seq)

@@ -223,8 +223,8 @@ class Polishing:
         design it was made for; a line at a time, so that a wait ends within a line's
         screening and the lines left share the cores) and, with :attr:`records_later`, its
         figures on the accuracy record's finer grid at each eccentricity (kept in the
-        evaluator's memory) and its quantities (their maxima over the turn kept by each quantity): each used where that
-        optimum is still the best when they are asked for."""
+        evaluator's memory) and its quantities (their maxima over the turn kept by each
+        quantity): each used where that optimum is still the best when they are asked for."""
         while self.checked_later:
             yield partial(self.solver.as_it_is, self.checked_later.pop(0))
         if self.best is None:

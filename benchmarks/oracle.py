@@ -29,7 +29,6 @@ import numpy as np
 import yaml
 
 from optdesign.problem.loader import problem_from_dict
-from optdesign.quantities import get_quantity
 from optdesign.quantities.criteria import objective_of
 from optdesign.solver import solve, verify
 from optdesign.solver.screening import sampled_scores, spread
@@ -67,6 +66,9 @@ class Draw:
     bounds: tuple = ()                # (quantity index, side: lower|upper|both, quantile)
     objective: tuple = ("ripple", False)    # (quantity, maximise)
     seed: int = 0
+    #: the counts ``count`` indexes instead of the base's own (a four-bar at 12 or 24 phases,
+    #: whose base admits 6 alone)
+    counts: tuple = ()
 
 
 def problem_data(draw: Draw) -> dict:
@@ -77,7 +79,7 @@ def problem_data(draw: Draw) -> dict:
     data.pop("solver", None)
     problem = problem_from_dict(base, where="base.yaml")
     model = problem.model
-    counts = problem.counts()
+    counts = draw.counts or problem.counts()
     data["design"][model.count_variable] = counts[draw.count % len(counts)]
     data["stroke"] = model.strokes[draw.stroke % len(model.strokes)]
     for k in problem.free_lengths():
@@ -158,7 +160,6 @@ def build(draw: Draw):
 def _sampled_values(problem, names) -> dict:
     """Each named quantity's sampled value over 1024 designs of the box that assemble."""
     from optdesign.quantities.bounds import QuantityBound
-    from dataclasses import replace
 
     if not names:
         return {}
@@ -248,7 +249,7 @@ def run(draw: Draw) -> dict:
     found = sample(problem)
     claims = judge(problem, result, found)
     spans = [problem.design[k].upper / problem.design[k].lower for k in problem.free_lengths()]
-    return {"mechanism": draw.mechanism, "seed": draw.seed,
+    return {"mechanism": draw.mechanism, "seed": draw.seed, "counts": list(problem.counts()),
             "decades": round(max(math.log10(s) for s in spans), 2) if spans else 0.0,
             "initial": draw.initial, "objective": problem.objective.minimize,
             "bounds": ", ".join(f"{s.key}{'≥' if math.isfinite(s.lower) else ''}"
@@ -259,9 +260,12 @@ def run(draw: Draw) -> dict:
             "claims": "; ".join(claims)}
 
 
-def random_draw(rng: np.random.Generator, seed: int) -> Draw:
-    """A draw from numpy's generator (the benchmark's; the test draws through hypothesis)."""
+def random_draw(rng: np.random.Generator, seed: int, counts: tuple = ()) -> Draw:
+    """A draw from numpy's generator (the benchmark's; the test draws through hypothesis).
+    With ``counts``, a four-bar at one of those phase counts."""
     mechanism = list(BASES)[int(rng.integers(len(BASES)))]
+    if counts:
+        mechanism = "fourbar_converter"
     names = QUANTITIES[mechanism]
     bounds = tuple((int(rng.integers(len(names))), str(rng.choice(["lower", "upper", "both"])),
                     float(rng.uniform(-0.1, 1.1)))
@@ -269,4 +273,4 @@ def random_draw(rng: np.random.Generator, seed: int) -> Draw:
     objective = (str(rng.choice(["ripple"] * 3 + list(names))), bool(rng.random() < 0.3))
     return Draw(mechanism, float(rng.uniform(1, 6)), float(rng.random()),
                 bool(rng.random() < 0.5), int(rng.integers(4)), int(rng.integers(3)), bounds,
-                objective, seed)
+                objective, seed, tuple(counts))

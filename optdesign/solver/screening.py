@@ -641,17 +641,17 @@ class LineScreening:
         return (len(self.rows) - self.screened) // LINE_POINTS
 
     def step(self) -> None:
-        """Screen the next line."""
-        self._screen(self.screened + LINE_POINTS)
+        """Screen the next line (none once every line is)."""
+        self._screen(min(self.screened + LINE_POINTS, len(self.rows)))
 
     def _screen(self, end: int) -> None:
         """Screen the rows up to ``end`` not screened yet, in one call (its lanes shared
         between threads where the caller owns the cores)."""
-        part = slice(self.screened, end)
         if end > self.screened:
+            part = slice(self.screened, end)
             self.scores[part], self.violations[part] = sampled_scores(
                 self.problem, self.count, self.base, self.free, self.rows[part])
-        self.screened = end
+            self.screened = end
 
     def seeds(self) -> list[Candidate]:
         """The local minima of every line, best first (the lines not screened yet screened

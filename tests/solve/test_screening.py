@@ -253,3 +253,22 @@ def test_a_range_of_decades_is_screened_evenly_in_its_logarithm():
     assert 0.45 < below < 0.55
     assert np.all((X[:, 0] >= 1e-3) & (X[:, 0] <= 1e3))
     np.testing.assert_allclose(X[:, 1], 100.0 + 300.0 * unit[:, 1])
+
+
+def test_the_lines_screened_one_at_a_time_give_the_seeds_of_one_call():
+    """A line screening made a line at a time (as a wait for a polish beside makes it), a step
+    past the last line included, gives the seeds of the lines screened in one call, to the
+    bit."""
+    from optdesign.solver import screening
+
+    p = disc_problem(12, 0.344)
+    design = solve(p).design
+    stepped = screening.LineScreening(p, 12, design)
+    lines = stepped.remaining
+    assert lines >= 2
+    for _ in range(lines + 1):
+        stepped.step()
+    assert stepped.remaining == 0
+    whole = screening.line_seeds(p, 12, design)
+    assert [(c.values, c.score) for c in stepped.seeds()] == \
+        [(c.values, c.score) for c in whole] and whole

@@ -9,7 +9,9 @@ Two kinds of library are made from a CasADi function (:class:`Recipe`):
 
 Both are compiled with ``gcc -O1`` and no contraction into fused multiply-adds: the same
 operations in the same order as CasADi's virtual machine, rounded the same on every target.
-Compiling takes a second to two minutes, so it happens once, and never while a command waits:
+Compiling takes a second to two minutes, so it happens once, and never while a command waits
+(code past :data:`MAX_CODE_BYTES`, or a compiler past :data:`MAX_COMPILER_CPU_S` of CPU, is not
+compiled: its function runs as it does without a compiler):
 
 * a library is named by a digest of what it is made from (the function as CasADi serialises
   it, CasADi's version, the machine, the compiler's flags, the kind and its options); it
@@ -33,6 +35,7 @@ from __future__ import annotations
 import logging
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -65,6 +68,17 @@ NICE = 10
 #: of many distinct problems (an oracle, a script over files) would otherwise start one per
 #: problem; a process that finds the slots taken starts none, and a later one starts it
 MAX_DETACHED_BUILDS = {"nlp": 1, "lanes": 2}
+
+#: generated code longer than this is not compiled (its function runs where it would without
+#: a compiler): the race's largest NLP (the disc problem at 24 phases) is 10 MB of C, which gcc
+#: takes two minutes on; a four-bar at 24 phases with bounds on the swing and the ripple
+#: generated 145 MB, on which gcc had taken a core for half an hour, unfinished
+MAX_CODE_BYTES = 40_000_000
+#: the CPU seconds each process of a compiler may take (``RLIMIT_CPU``; nine times the
+#: largest NLP of the race): a compilation past them is ended and noted as failed, so a build
+#: beside the work never holds a core for hours (nor outlives its lock, :data:`LOCK_STALE_S`,
+#: and is started a second time)
+MAX_COMPILER_CPU_S = 1200
 
 log = logging.getLogger("optdesign.compiled")
 
@@ -281,9 +295,17 @@ def build(where: Path, digest: str, kind: str, hessian: str, gcc: str, source: s
         function = ca.Function.deserialize((where / source).read_text())
         os.chdir(work)                   # the code generators write into the working folder
         code = _nlp_code(function, hessian) if kind == "nlp" else _lanes_code(function)
+        size = code.stat().st_size
+        if size > MAX_CODE_BYTES:
+            raise RuntimeError(f"its generated code is {size / 1e6:.0f} MB, more than "
+                               f"{MAX_CODE_BYTES / 1e6:.0f} MB: not compiled (a compiler would "
+                               f"take a core for an hour or more)")
         done = subprocess.run([gcc, *FLAGS, code.name, "-o", "out.so", "-lm"],
-                              capture_output=True, text=True)
+                              capture_output=True, text=True, preexec_fn=_compiler_limits)
         if done.returncode != 0:
+            if done.returncode == -signal.SIGXCPU or "CPU time limit" in done.stderr:
+                raise RuntimeError(f"{gcc} took more than {MAX_COMPILER_CPU_S} CPU seconds: "
+                                   f"not compiled")
             raise RuntimeError(f"{gcc} exited with {done.returncode}: "
                                f"{' '.join(done.stderr.split())[-500:]}")
         body = (work / "out.so").read_bytes()
@@ -301,6 +323,15 @@ def build(where: Path, digest: str, kind: str, hessian: str, gcc: str, source: s
         shutil.rmtree(work, ignore_errors=True)
         (where / source).unlink(missing_ok=True)
         (where / f"{name}.lock").unlink(missing_ok=True)
+
+
+def _compiler_limits() -> None:
+    """In the compiler's process, before it runs: at most :data:`MAX_COMPILER_CPU_S` CPU
+    seconds, then SIGXCPU (each process it starts inherits the limit; the hard limit, a kill,
+    comes ten seconds later)."""
+    import resource
+
+    resource.setrlimit(resource.RLIMIT_CPU, (MAX_COMPILER_CPU_S, MAX_COMPILER_CPU_S + 10))
 
 
 def warm_up(recipes: list[Recipe], where: Path, processes: int = 1) -> list[tuple]:

@@ -249,3 +249,46 @@ def test_the_library_is_named_by_the_nlp_and_the_flags(cache, monkeypatch):
     assert recipe_of(problem_from_dict(vergov_data() | {"name": "other"})).digest == rec.digest
     monkeypatch.setattr(compiled, "FLAGS", ("-O2", "-shared", "-fPIC"))
     assert recipe_of(problem).digest != rec.digest
+
+
+def _serialized(rec, where):
+    """``rec``'s function written where a build reads it (as :func:`compiled.start` does)."""
+    (where / f"{rec.name}.casadi").write_text(rec.serialized)
+    return f"{rec.name}.casadi"
+
+
+def test_code_too_long_to_compile_is_not_compiled(tmp_path, monkeypatch):
+    """Generated code past MAX_CODE_BYTES is not handed to a compiler (a four-bar at 24
+    phases with swing and ripple bounds generated 145 MB, on which gcc took a core for half an
+    hour): the build is noted as failed, naming the size, and leaves nothing else behind."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    monkeypatch.chdir(tmp_path)                 # (a build changes the working folder)
+    monkeypatch.setattr(c_library, "MAX_CODE_BYTES", 1000)
+    rec = recipe_of(problem_from_dict(vergov_data()))
+    where = compiled.folder()
+    with pytest.raises(RuntimeError, match="generated code is .* MB, more than 0 MB"):
+        c_library.build(where, rec.digest, rec.kind, rec.hessian, shutil.which("gcc"),
+                        _serialized(rec, where))
+    assert (where / f"{rec.name}.failed").read_text().startswith(
+        "RuntimeError: its generated code is")
+    assert nlp_files(where) == [f"{rec.name}.failed"]
+
+
+def test_a_compiler_past_its_cpu_seconds_is_ended(tmp_path, monkeypatch):
+    """A compiler that computes on past MAX_COMPILER_CPU_S (here a loop that never ends, given
+    one second) is ended by the limit, and the build noted as failed for it."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(c_library, "MAX_COMPILER_CPU_S", 1)
+    endless = tmp_path / "endless-gcc"
+    endless.write_text("#!/bin/sh\nwhile :; do :; done\n")
+    endless.chmod(0o755)
+    rec = recipe_of(problem_from_dict(vergov_data()))
+    where = compiled.folder()
+    t0 = time.monotonic()
+    with pytest.raises(RuntimeError, match="took more than 1 CPU seconds"):
+        c_library.build(where, rec.digest, rec.kind, rec.hessian, str(endless),
+                        _serialized(rec, where))
+    assert time.monotonic() - t0 < 60
+    assert "CPU seconds" in (where / f"{rec.name}.failed").read_text()
+    assert nlp_files(where) == [f"{rec.name}.failed"]

@@ -61,7 +61,7 @@ class Draw:
     decades: float                    # the box spans 10**decades on each free length
     centre: float                     # where the widened box sits, in [0, 1)
     initial: bool                     # keep the file's initial values
-    count: int                        # index into the base's admissible counts
+    count: int                        # index into the base's admissible counts (or ``counts``)
     stroke: int                       # index into the mechanism's strokes
     bounds: tuple = ()                # (quantity index, side: lower|upper|both, quantile)
     objective: tuple = ("ripple", False)    # (quantity, maximise)

@@ -242,7 +242,7 @@ class Polishing:
     def _lines_through(self, values: dict) -> LineScreening:
         """The :class:`~optdesign.solver.screening.LineScreening` through ``values``, made once
         for the last design asked for (the lines screened so far kept)."""
-        if self._lines is None or self._lines.through != tuple(sorted(values.items())):
+        if self._lines is None or not self._lines.passes_through(values):
             self._lines = LineScreening(self.problem, self.count, values)
         return self._lines
 

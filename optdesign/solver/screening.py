@@ -635,6 +635,10 @@ class LineScreening:
         self.screened = 0           # rows screened so far, line by line
         self._seeds: list[Candidate] | None = None
 
+    def passes_through(self, values: dict) -> bool:
+        """Whether these lines pass through the design ``values``."""
+        return self.through == tuple(sorted(values.items()))
+
     @property
     def remaining(self) -> int:
         """Lines not screened yet."""

@@ -19,8 +19,9 @@ values, bounds and parameters it is given, and its iteration watch is armed afre
 the NLP of exactly the hand-over slots it asks for (a solve that once needed more slots
 leaves an NLP of more slots here, which a later solve asking for fewer is not given: IPOPT
 on it would take another path). So a solve on kept NLPs makes the same iterations, to the
-bit, as on new ones. At most :data:`KEPT` problems' counts are kept, the least recently used
-let go first.
+bit, as on new ones. At most :data:`KEPT` problems' counts are kept, and no more than hold
+:data:`KEPT_BYTES` together (or the one asked for alone), the least recently used let go
+first.
 """
 from __future__ import annotations
 
@@ -32,9 +33,15 @@ from collections import OrderedDict
 
 from optdesign.solver import compiled
 
-#: phase counts' NLPs kept (problems × counts); an NLP takes up to about 20 MB (the disc
-#: problem's at 24 phases: 17 MB)
+#: phase counts' NLPs kept (problems × counts)
 KEPT = 16
+#: ... and the C heap's bytes they may hold together (``PhaseNLP.held_bytes``). The disc
+#: problem's NLP at 24 phases holds 29 MB with IPOPT on L-BFGS (111 MB with the exact Hessian
+#: built too), so sixteen of the race's fit; a four-bar's at 24 phases with bounds on its swing
+#: and ripple holds 344 MB (1.27 GB), and sixteen such (a notebook that changes a bound: each
+#: bound a problem of its own) would hold 20 GB. The least recently used are let go first, the
+#: one asked for never.
+KEPT_BYTES = 2 * 2**30
 
 _kept: OrderedDict = OrderedDict()
 _lock = threading.Lock()
@@ -68,9 +75,14 @@ def kept(problem, count: int) -> dict:
     with _lock:
         nlps = _kept.pop(key, None)
         _kept[key] = nlps = {} if nlps is None else nlps
-        while len(_kept) > KEPT:
+        while len(_kept) > KEPT or len(_kept) > 1 and held_bytes() > KEPT_BYTES:
             _kept.popitem(last=False)
     return nlps
+
+
+def held_bytes() -> int:
+    """The C heap's bytes the kept NLPs hold (as their builds measured them)."""
+    return sum(nlp.held_bytes for nlps in _kept.values() for nlp in nlps.values())
 
 
 def forget() -> None:

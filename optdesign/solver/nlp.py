@@ -46,6 +46,7 @@ import numpy as np
 
 from optdesign.envelope.sampled import STROKE_SIGNS, ripple_of
 from optdesign.evaluation.figures import eccentricities_of
+from optdesign.numerics import heap
 from optdesign.quantities import get_quantity
 from optdesign.quantities.criteria import (constraints_of, interval_quantities, objective_of,
                                            spec_forms, spec_sides,
@@ -406,7 +407,12 @@ class PhaseNLP:
         self.layout = Layout()
         self._solvers: dict[str, ca.Function] = {}
         self.watch: _Watch | None = None
+        #: the C heap's bytes this NLP holds: its graph and each IPOPT built on it (what
+        #: their builds left allocated, :mod:`optdesign.numerics.heap`; 0 where unknown)
+        self.held_bytes = 0
+        before = heap.in_use()
         self._build()
+        self.held_bytes += heap.grown_since(before)
 
     # ------------------------------------------------------------------ building
     def _sample_function(self, fn) -> ca.Function:
@@ -671,8 +677,10 @@ class PhaseNLP:
             opts = dict(IPOPT_OPTIONS) | {"ipopt.max_iter": iterations_of(self.problem),
                                           "ipopt.hessian_approximation": hessian,
                                           "iteration_callback": self.watch}
+            before = heap.in_use()
             self._solvers[hessian] = compiled.nlpsol(f"nlp_n{self.count}", self.x_sym,
                                                      self.p_sym, self.f, self.g, opts)
+            self.held_bytes += heap.grown_since(before)
         return self._solvers[hessian]
 
     # ------------------------------------------------------------------ per solve

@@ -2,10 +2,12 @@
 nothing and answers the same to the last bit; a problem that differs in anything the NLP is
 built from (here a length's box) gets an NLP of its own."""
 import pickle
+from types import SimpleNamespace
 
 import pytest
 
 from optdesign.evaluation import figures
+from optdesign.numerics import heap
 from optdesign.problem.loader import load_problem, problem_from_dict
 from optdesign.solver import built, phase_solver, polishing, solve
 from optdesign.solver.nlp import PhaseNLP
@@ -84,12 +86,34 @@ def test_the_least_recently_used_are_let_go(fresh, monkeypatch):
     monkeypatch.setattr(built, "KEPT", 2)
     problem = problem_from_dict(file_data(VERGOV))
     first = built.kept(problem, 3)
-    first[3] = "an NLP"
+    first[3] = nlp = SimpleNamespace(held_bytes=1000)       # (an NLP's stand-in)
     built.kept(problem, 5)
     built.kept(problem, 3)                      # used again: the count 5's goes first
     built.kept(problem, 7)
-    assert built.kept(problem, 3) is first and first == {3: "an NLP"}
+    assert built.kept(problem, 3) is first and first == {3: nlp}
     assert built.kept(problem, 5) == {}         # let go: an empty dict to fill anew
+
+
+def test_the_kept_nlps_hold_at_most_their_bytes(fresh, monkeypatch):
+    """NLPs that hold more than KEPT_BYTES together are let go, the least recently used
+    first, and never the one asked for: each NLP holds what its build and its IPOPT's left
+    allocated on the C heap."""
+    if heap.in_use() is None:
+        pytest.skip("no mallinfo2 here: nothing is weighed")
+    problem = problem_from_dict(file_data(VERGOV))
+    phase_solver.PhaseSolver(problem, 3).prepare()
+    held = built.held_bytes()
+    assert held > 1_000_000                     # its graph and IPOPT's functions on it
+    monkeypatch.setattr(built, "KEPT_BYTES", held + 1)
+    five = built.kept(problem, 5)
+    five[1] = SimpleNamespace(held_bytes=1)     # (an NLP's stand-in): both fit, both kept
+    assert len(built._kept) == 2
+    five[1].held_bytes = 2                      # one byte too many: asked for, the count 5's
+    assert built.kept(problem, 5) is five and list(built._kept.values()) == [five]
+    monkeypatch.setattr(built, "KEPT_BYTES", 1)
+    phase_solver.PhaseSolver(problem, 3).prepare()  # the count 5's let go as the 3's is asked for
+    nlps = built.kept(problem, 3)               # alone, the one asked for is kept past the budget
+    assert list(built._kept.values()) == [nlps] and nlps[6].held_bytes > 1_000_000
 
 
 def test_a_criterion_added_to_the_mechanism_builds_another_nlp(fresh, monkeypatch):

@@ -71,8 +71,9 @@ MAX_DETACHED_BUILDS = {"nlp": 1, "lanes": 2}
 
 #: generated code longer than this is not compiled (its function runs where it would without
 #: a compiler): the race's largest NLP (the disc problem at 24 phases) is 10 MB of C, which gcc
-#: takes two minutes on; a four-bar at 24 phases with bounds on the swing and the ripple
-#: generated 145 MB, on which gcc had taken a core for half an hour, unfinished
+#: takes two minutes on; a four-bar at 16 phases with its peak acceleration bounded and
+#: minimised generated 145 MB, on which gcc had taken a core for half an hour, unfinished (one
+#: at 24 phases with bounds on its swing and ripple, 119 MB)
 MAX_CODE_BYTES = 40_000_000
 #: the CPU seconds each process of a compiler may take (``RLIMIT_CPU``; nine times the
 #: largest NLP of the race): a compilation past them is ended and noted as failed, so a build

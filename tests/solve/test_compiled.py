@@ -258,9 +258,10 @@ def _serialized(rec, where):
 
 
 def test_code_too_long_to_compile_is_not_compiled(tmp_path, monkeypatch):
-    """Generated code past MAX_CODE_BYTES is not handed to a compiler (a four-bar at 24
-    phases with swing and ripple bounds generated 145 MB, on which gcc took a core for half an
-    hour): the build is noted as failed, naming the size, and leaves nothing else behind."""
+    """Generated code past MAX_CODE_BYTES is not handed to a compiler (a four-bar at 16
+    phases with its peak acceleration bounded and minimised generated 145 MB, on which gcc
+    took a core for half an hour): the build is noted as failed, naming the size, and leaves
+    nothing else behind."""
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     monkeypatch.chdir(tmp_path)                 # (a build changes the working folder)
     monkeypatch.setattr(c_library, "MAX_CODE_BYTES", 1000)

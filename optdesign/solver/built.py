@@ -19,9 +19,9 @@ values, bounds and parameters it is given, and its iteration watch is armed afre
 the NLP of exactly the hand-over slots it asks for (a solve that once needed more slots
 leaves an NLP of more slots here, which a later solve asking for fewer is not given: IPOPT
 on it would take another path). So a solve on kept NLPs makes the same iterations, to the
-bit, as on new ones. At most :data:`KEPT` problems' counts are kept, and no more than hold
-:data:`KEPT_BYTES` together (or the one asked for alone), the least recently used let go
-first.
+bit, as on new ones. At most :data:`KEPT` problems' counts are kept, holding at most
+:data:`KEPT_BYTES` together (more only where the one asked for holds more alone), the least
+recently used let go first.
 """
 from __future__ import annotations
 

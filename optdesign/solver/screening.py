@@ -595,12 +595,6 @@ def _basins(candidates: list[Candidate], d: int) -> tuple[list[Candidate], float
 LINE_POINTS = 64
 
 
-def line_seeds(problem, count: int, values: dict) -> list[Candidate]:
-    """Basins beside an optimum along each free length that is not on a bound
-    (:class:`LineScreening`, every line at once)."""
-    return LineScreening(problem, count, values).seeds()
-
-
 class LineScreening:
     """The box screened again on lines through an optimum ``values``, one per free length
     inside its bounds (the others held, so the bounds the optimum rests on stay active; evenly

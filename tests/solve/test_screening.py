@@ -142,7 +142,7 @@ def test_the_line_screening_scores_every_line_in_one_call_as_line_by_line(monkey
         return out
 
     monkeypatch.setattr(screening, "sampled_scores", recorded)
-    screening.line_seeds(p, 12, result.design)
+    screening.LineScreening(p, 12, result.design).seeds()
     assert len(calls) == 1
     base, free, X, (score, violation) = calls[0]
     lines, rest = divmod(len(X), screening.LINE_POINTS)
@@ -269,6 +269,6 @@ def test_the_lines_screened_one_at_a_time_give_the_seeds_of_one_call():
     for _ in range(lines + 1):
         stepped.step()
     assert stepped.remaining == 0
-    whole = screening.line_seeds(p, 12, design)
+    whole = screening.LineScreening(p, 12, design).seeds()      # every line in one call
     assert [(c.values, c.score) for c in stepped.seeds()] == \
         [(c.values, c.score) for c in whole] and whole

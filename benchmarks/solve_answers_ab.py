@@ -13,12 +13,15 @@ polish (a design where a polish stopped, or a screened one) and the time of all 
         [--mechanisms fourbar_converter slotted_lever pulse_reducer] [--resume]
 
 Writes benchmarks/results/solve_answers_ab.md and .json (each tree's rows also in
-``solve_answers_ab_<tree>.json`` as they come: ``--resume`` goes on from them).
+``solve_answers_ab_<tree>.json`` as they come: ``--resume`` goes on from them); ``--name N``
+writes ``N.md``, ``N.json`` and ``N_<tree>.json`` instead, so that a comparison the docs
+quote keeps its file beside the others.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -109,6 +112,8 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--mechanisms", nargs="+", choices=MECHANISMS, default=list(MECHANISMS))
     ap.add_argument("--resume", action="store_true")
+    ap.add_argument("--name", default="solve_answers_ab",
+                    help="the results files' name (benchmarks/results/NAME.md, ...)")
     ap.add_argument("--_tree", choices=TREES, help=argparse.SUPPRESS)
     ap.add_argument("--_out", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
@@ -117,7 +122,9 @@ def main(argv=None) -> int:
     if args._tree:
         tree_rows(args)
         return 0
-    paths = {name: RESULTS / f"solve_answers_ab_{name}.json" for name in TREES}
+    if not re.fullmatch(r"[A-Za-z0-9_-]{1,64}", args.name):
+        ap.error("--name must be 1 to 64 letters, digits, '_' or '-'")
+    paths = {name: RESULTS / f"{args.name}_{name}.json" for name in TREES}
     if not args.resume:
         for path in paths.values():
             path.unlink(missing_ok=True)
@@ -140,7 +147,7 @@ def main(argv=None) -> int:
 
     rows = {name: json.loads(p.read_text()) for name, p in paths.items()}
     summary, moved = compare(rows["base"], rows["head"])
-    write_results("solve_answers_ab",
+    write_results(args.name,
                   {"base": args.base, "seed": args.seed, "problems": args.problems,
                    "mechanisms": args.mechanisms},
                   {"summary": summary, "moved": moved}, table(rows, summary, moved, args.base))

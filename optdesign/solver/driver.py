@@ -107,7 +107,7 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
     seeds = list(screening.seeds)
     if reach is not None and reach.design is not None:
         seeds.insert(0, _seed(problem, reach.design))   # meets every bound: polish it first
-    work.basins(seeds)
+    work.basins(seeds, screening.leads)
     work.rescue()
     work.lines()
     if work.best is None and relax and reach is None:

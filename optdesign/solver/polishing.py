@@ -106,7 +106,7 @@ class Polishing:
             not r.feasible or r.ipopt_status not in SUCCESS + (JOINED,)
             for r in self.result.starts)
 
-    def basins(self, seeds) -> None:
+    def basins(self, seeds, leads: int = 1) -> None:
         """Polish the best basins' seeds: `basins` of them once one is feasible; with none
         feasible, on until `agree + 1` IPOPT verdicts of local infeasibility on one constraint
         (or `starts` polishes). Where the polishes end :meth:`apart`, on through the next
@@ -124,26 +124,32 @@ class Polishing:
         each stopped once it joins an optimum found already; with more than one worker, the
         next one is begun beside each and kept where the turn would have polished it with the
         same knowledge (:meth:`_further`). Either way each polish is the one the single
-        process makes, to the bit: only the time differs (``tests/solve/test_built.py``)."""
+        process makes, to the bit: only the time differs (``tests/solve/test_built.py``).
+        The first ``leads`` of the best basins are each polished to their end, the others
+        beside them with the secondary budget (two leads where the screening's feasibility
+        stage added designs to a box sample that passed a few:
+        :attr:`~optdesign.solver.screening.Screening.leads`)."""
         s = self.problem.solver
         seeds = list(seeds)
         head = min(s.basins, s.starts, len(seeds))
         if head > 1:
-            self._head([seed.values for seed in seeds[:head]])
+            self._head([seed.values for seed in seeds[:head]], leads)
             seeds = seeds[head:]
         self._further([seed.values for seed in seeds])
 
-    def _head(self, starts: list[dict]) -> None:
+    def _head(self, starts: list[dict], leads: int = 1) -> None:
         """The best basins' polishes as if at once (:meth:`basins`): the first here, the
-        next ``workers - 1`` in processes forked beside it, the rest here after it."""
+        next ``workers - 1`` in processes forked beside it, the rest here after it; the
+        first ``leads`` each to its end, the others with the secondary budget."""
         others = starts[1:]
+        secondary = [k + 1 >= leads for k in range(len(others))]
         if self.workers > 1:
             self.solver.prepare()           # built once, before the processes part
         beside, handed = others[:self.workers - 1], []
         if beside:      # checked there once its polish is done (it often ends first)
             handed, self.checked_later = self.checked_later, []
         at_once = _head_beside(self.problem, self.count, beside,
-                               self.solver.checks_in_parallel, handed)
+                               self.solver.checks_in_parallel, handed, secondary)
         try:
             with lanes.threads(1) if at_once else nullcontext():
                 self.polish(starts[0])
@@ -156,9 +162,9 @@ class Polishing:
             for evaluation in checked:
                 remember(self.problem, evaluation)
             self._record_made(outcome, timings, beside=True)
-        for values in others[len(at_once):]:
+        for k, values in enumerate(others[len(at_once):], start=len(at_once)):
             self._record_made(*_polish_beside(self.problem, self.count, values,
-                                              self.solver.checks_in_parallel))
+                                              self.solver.checks_in_parallel, secondary[k]))
 
     def _further(self, starts: list[dict]) -> None:
         """The basins after the best ones, in the screening's order, while they can bring a
@@ -348,13 +354,13 @@ def _as_found(outcome: Outcome) -> Outcome:
     return Outcome(record, outcome.verification, dict(outcome.values), None)
 
 
-def _polish_beside(problem, count: int, values: dict,
-                   checks_in_parallel: bool = False) -> tuple[Outcome, Timings]:
+def _polish_beside(problem, count: int, values: dict, checks_in_parallel: bool = False,
+                   secondary: bool = True) -> tuple[Outcome, Timings]:
     """A further best basin's polish (``secondary``: with a budget) on a solver of its own,
     which knows no optimum found before (its NLPs the process's kept ones of exactly the
     slots it asks for, :mod:`optdesign.solver.built`); its outcome and stage times."""
     solver = _of_its_own(problem, count, checks_in_parallel)
-    return solver.solve_from(dict(values), secondary=True), solver.timings
+    return solver.solve_from(dict(values), secondary=secondary), solver.timings
 
 
 def _of_its_own(problem, count: int, checks_in_parallel: bool) -> "PhaseSolver":
@@ -365,14 +371,16 @@ def _of_its_own(problem, count: int, checks_in_parallel: bool) -> "PhaseSolver":
 
 
 def _head_beside(problem, count: int, starts: list[dict], checks_in_parallel: bool = False,
-                 checks: list[dict] = ()) -> list:
-    """:func:`_polish_beside` of each of ``starts``, each begun in a process forked now
+                 checks: list[dict] = (), secondary=None) -> list:
+    """:func:`_polish_beside` of each of ``starts`` (``secondary``: whether each has the
+    secondary budget; each has by default), each begun in a process forked now
     (:func:`optdesign.lifetime.beside`, :func:`_polish_here`): called, each waits for its
     outcome and stage times (computed here if its process is lost). The same polish as in
     this process, on the same memory: the outcome is the same to the bit. The first also
     checks ``checks`` as they are, once its polish is done."""
+    secondary = [True] * len(starts) if secondary is None else secondary
     return [lifetime.beside(_polish_here, _of_its_own(problem, count, checks_in_parallel),
-                            values, [], True, checks if k == 0 else ())
+                            values, [], secondary[k], checks if k == 0 else ())
             for k, values in enumerate(starts)]
 
 

@@ -58,6 +58,10 @@ class Screening:
     candidates: list[Candidate] = field(default_factory=list)     # every screened design
     seeds: list[Candidate] = field(default_factory=list)          # one per basin, best first
     radius: float = 0.0
+    #: the seeds (the first) that each lead a polish to its end (the others beside them are
+    #: polished with the secondary budget): two where a feasibility stage added designs to a
+    #: box sample that passed a few (:func:`_led`)
+    leads: int = 1
     n_feasible: int = 0
     #: the share of the box's assembling sample that breaks each constraint, by its name
     missed: dict = field(default_factory=dict)
@@ -150,7 +154,9 @@ def screen(problem, count: int, n_designs: int, extra: list[dict] = (),
     else:
         missed = {}
         score, violation = sampled_scores(problem, count, base, free, X, sampled, missed)
-    if free and sampled is None and too_few_pass(violation, lower, upper):
+    n_sample, passed = len(X), int(np.sum(violation <= 0))
+    staged = bool(free) and sampled is None and too_few_pass(violation, lower, upper)
+    if staged:
         X, score, violation = toward_feasible(problem, count, base, free, lower, upper,
                                               X, score, violation)
     feasible = violation <= 0
@@ -166,8 +172,28 @@ def screen(problem, count: int, n_designs: int, extra: list[dict] = (),
         out.candidates.append(Candidate(base | dict(zip(free, X[i])), float(key[i]),
                                         bool(feasible[i]), unit[i],
                                         float(score[i]) if feasible[i] else math.inf))
-    out.seeds, out.radius = _basins(out.candidates, len(free))
+    if staged and passed:
+        out.seeds, out.radius, out.leads = _led(out.candidates, n_sample, len(free))
+    else:
+        out.seeds, out.radius = _basins(out.candidates, len(free))
     return out
+
+
+def _led(candidates: list[Candidate], n_sample: int, d: int) -> tuple[list, float, int]:
+    """The seeds of a screening whose box sample (its first ``n_sample`` candidates) passed
+    the filters too few times and whose feasibility stage added the rest: each part's own
+    basins (MLSL counts on an even sample: the stage's designs, drawn around the least
+    violating ones, lie beside every passing design of the sample and would join every basin
+    into one), the best of each first, then the others best first; and how many lead (the
+    sample's best, and the stage's where it passes: each polished to its end, since in a box
+    of decades a basin's path to its optimum can take hundreds of iterations). Returns the
+    seeds, the sample's critical distance and the leads."""
+    sample, radius = _basins(candidates[:n_sample], d)
+    stage, _ = _basins(candidates[n_sample:], d)
+    leads = [sample[0]] + [c for c in stage[:1] if c.feasible]
+    rest = [c for c in sample + stage if not any(c is lead for lead in leads)]
+    return (sorted(leads, key=lambda c: c.score) + sorted(rest, key=lambda c: c.score),
+            radius, len(leads))
 
 
 #: a free length whose range spans at least this ratio (two decades) is sampled evenly in
@@ -261,7 +287,9 @@ def too_few_pass(violation: np.ndarray, lower: np.ndarray, upper: np.ndarray) ->
     8 of 4097 designs, whose polishes ran out of iterations and left δ 0.62, where a design
     of a box sample polishes to 0.9994 (``benchmarks/solve_oracle.py --counts``). In a
     narrower box few passing designs are the constraints' own word (the disc problem passes 3
-    of 513 and its polishes find its optimum), and the stage would only add polishes."""
+    of 513 and its polishes find its optimum), and the stage would only add polishes. Where
+    the stage runs on a sample that passed a few, its basins and the sample's are counted
+    apart (:func:`_led`)."""
     passed = int(np.sum(violation <= 0))
     return passed == 0 or (passed < ENOUGH_FEASIBLE and bool(np.any(wide(lower, upper))))
 

@@ -97,13 +97,18 @@ class Polishing:
 
     def apart(self) -> bool:
         """Whether the polishes so far ended apart: more than one optimum, or a polish that
-        reached none (stalled, out of budget, infeasible). A count whose best basins lead to
-        different places is multimodal, and its next basins are worth polishing. A polish
-        stopped as it came near a known optimum (:data:`JOINED`) counts as one that reached
-        none: it may only pass by (``tests/solve/test_basins_apart.py``: the second basin,
-        polished knowing the first's optimum)."""
+        reached a place of its own short of an optimum (out of budget, infeasible, stopped
+        elsewhere). A count whose best basins lead to different places is multimodal, and
+        its next basins are worth polishing. A polish stopped as it came near a known
+        optimum (:data:`JOINED`) counts as one that reached none: it may only pass by
+        (``tests/solve/test_basins_apart.py``: the second basin, polished knowing the
+        first's optimum). A polish still far from feasible after its first iterations
+        (:data:`STALLED`) does not: it reached no place at all, and says nothing of where
+        its basin leads (the disc problem at four phases: its second basin stalls, and the
+        two next basins polished for it joined the first's optimum and stalled again)."""
         return len(self.optima) > 1 or any(
-            not r.feasible or r.ipopt_status not in SUCCESS + (JOINED,)
+            r.ipopt_status != STALLED and
+            (not r.feasible or r.ipopt_status not in SUCCESS + (JOINED,))
             for r in self.result.starts)
 
     def basins(self, seeds, leads: int = 1) -> None:

@@ -19,9 +19,14 @@ def _records(path):
     return Journal(path).read()[1]
 
 
+#: sweep points: enough that the kill, polled every few milliseconds, lands before the last
+#: (at 4 phases a point's polish takes tens of milliseconds)
+POINTS = 12
+
+
 def test_killed_sweep_resumes_without_loss_or_recomputation(tmp_path):
     problem = tmp_path / "small.yaml"
-    problem.write_text(yaml.safe_dump(small(points=5)))
+    problem.write_text(yaml.safe_dump(small(points=POINTS)))
     out = tmp_path / "out"
     journal = out / "points.jsonl"
     env = os.environ | {"PYTHONPATH": str(ROOT)}
@@ -36,7 +41,7 @@ def test_killed_sweep_resumes_without_loss_or_recomputation(tmp_path):
                 break
             if proc.poll() is not None:
                 break
-            time.sleep(0.05)
+            time.sleep(0.005)
         proc.send_signal(signal.SIGKILL)
         proc.wait(timeout=30)
     finally:
@@ -45,7 +50,7 @@ def test_killed_sweep_resumes_without_loss_or_recomputation(tmp_path):
     before = _records(journal)
     keys_before = [tuple(r["key"]) for r in before]
     assert any(r["kind"] == "sweep" for r in before), "killed before any sweep point"
-    assert len(keys_before) < 2 + 5, "the sweep finished before it could be killed"
+    assert len(keys_before) < 2 + POINTS, "the sweep finished before it could be killed"
 
     assert main(["pareto", str(problem), "--out", str(out), "--resume", "--workers", "1",
                  "--no-report"]) == 0
@@ -54,6 +59,6 @@ def test_killed_sweep_resumes_without_loss_or_recomputation(tmp_path):
     assert after[:len(before)] == before                      # nothing lost or rewritten
     assert len(set(keys_after)) == len(keys_after)            # nothing computed twice
     assert set(keys_after) == {(4, "least_ripple"), (4, "largest_ratio")} | {
-        (4, i) for i in range(5)}
+        (4, i) for i in range(POINTS)}
     df = pd.read_csv(out / "pareto.csv")
-    assert len(df) == 5 and (df["status"] == "optimal").all()
+    assert len(df) == POINTS and (df["status"] == "optimal").all()

@@ -56,3 +56,20 @@ def test_on_one_worker_the_best_basins_are_polished_as_on_two(six_phases):
                              for s in result.best_phase().starts]
     assert polishes[1] == polishes[2]
     assert polishes[1][1][0] == phase_solver.EXHAUSTED
+
+
+def test_a_second_basin_that_stalls_infeasible_does_not_call_for_more():
+    """The disc problem at four phases: the second basin's polish is still infeasible after
+    its first 30 iterations (``Stalled_Infeasible``), which says nothing of where that basin
+    leads; the count is not polished further (two more basins were, which joined the first's
+    optimum and stalled again), and the optimum is the same."""
+    problem = load_problem(ROOT / "problems" / "sharkov2022_disc.yaml")
+    design = dict(problem.design)
+    design["phases"] = replace(design["phases"], value=4.0)
+    problem = replace(problem, design=design)
+    result = solve(problem)
+    assert result.status == "optimal"
+    assert result.delta == pytest.approx(0.252056, abs=2e-6)
+    starts = result.best_phase().starts
+    assert [s.ipopt_status for s in starts[:2]] == ["Solve_Succeeded", phase_solver.STALLED]
+    assert result.best_phase().screening["polished"] == 2

@@ -155,7 +155,7 @@ def screen(problem, count: int, n_designs: int, extra: list[dict] = (),
         missed = {}
         score, violation = sampled_scores(problem, count, base, free, X, sampled, missed)
     n_sample, passed = len(X), int(np.sum(violation <= 0))
-    staged = bool(free) and sampled is None and too_few_pass(violation, lower, upper)
+    staged = bool(free) and sampled is None and too_few_pass(passed, lower, upper)
     if staged:
         X, score, violation = toward_feasible(problem, count, base, free, lower, upper,
                                               X, score, violation)
@@ -278,19 +278,18 @@ LEAST_SPREAD = 0.03
 RELATIVE = (0.5, 40.0)
 
 
-def too_few_pass(violation: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> bool:
-    """Whether a screening's sample calls for the feasibility stage (:func:`toward_feasible`):
-    where none of it passes the filters, or, in a box of decades (:data:`LOG_SPAN`), where
-    fewer than :data:`ENOUGH_FEASIBLE` pass. A linkage's feasible proportions fill a share of
-    such a box that shrinks with every decade, and its few passing designs may all lie far
-    from the basins: a four-bar's ripple maximised at 8 phases in a box of 4.35 decades passed
+def too_few_pass(passed: int, lower: np.ndarray, upper: np.ndarray) -> bool:
+    """Whether a screening's sample, ``passed`` of whose designs pass the filters, calls for
+    the feasibility stage (:func:`toward_feasible`): where none of it passes the filters, or,
+    in a box of decades (:data:`LOG_SPAN`), where fewer than :data:`ENOUGH_FEASIBLE` pass. A
+    linkage's feasible proportions fill a share of such a box that shrinks with every decade,
+    and its few passing designs may all lie far from the basins: a four-bar's ripple maximised at 8 phases in a box of 4.35 decades passed
     8 of 4097 designs, whose polishes ran out of iterations and left δ 0.62, where a design
     of a box sample polishes to 0.9994 (``benchmarks/solve_oracle.py --counts``). In a
     narrower box few passing designs are the constraints' own word (the disc problem passes 3
     of 513 and its polishes find its optimum), and the stage would only add polishes. Where
     the stage runs on a sample that passed a few, its basins and the sample's are counted
     apart (:func:`_led`)."""
-    passed = int(np.sum(violation <= 0))
     return passed == 0 or (passed < ENOUGH_FEASIBLE and bool(np.any(wide(lower, upper))))
 
 

@@ -81,12 +81,15 @@ def lanes_recipes_of(problem) -> list[tuple]:
     admissible count's kinematics (the exact evaluator's grids) and speeds (the screening)."""
     from optdesign.evaluation.design import Design
     from optdesign.numerics import native_lanes
+    from optdesign.numerics.angle_lanes import legs_of
 
     out = []
     for count in problem.counts():
         design = Design.from_problem(problem, {problem.model.count_variable: count})
         model, options = design.model, design.option_key
-        for what, fn in (("kinematics", model.kinematics(count, options)),
+        kinematics = model.kinematics(count, options)
+        # the kinematics' lanes run its angles' legs (optdesign.numerics.angle_lanes)
+        for what, fn in (("kinematics", legs_of(kinematics) or kinematics),
                          ("speeds", model.speeds(count, options))):
             out.append((f"{problem.model.count_variable} = {count}, {what} lanes",
                         native_lanes.recipe(fn, fn.serialize())))

@@ -17,6 +17,7 @@ import numpy as np
 
 from optdesign.declarations import Key
 from optdesign.envelope.sampled import STROKE_SIGNS  # noqa: F401  (a mechanism's strokes)
+from optdesign.numerics.angle_lanes import angle_lanes
 from optdesign.numerics.lanes import Lanes
 
 @dataclass(frozen=True)
@@ -74,6 +75,16 @@ class Mechanism(ABC):
         ``joints`` (name -> 2-vector, for drawings) and ``links`` (pairs of joint names).
         """
 
+    def screening_expressions(self, phi, p: Mapping[str, ca.SX], count: int,
+                              options: Mapping[str, str]) -> dict:
+        """:meth:`chain_expressions` as the screening's speeds (:meth:`speeds`) are made
+        from: the same unless a mechanism writes its chains there in another form, the same
+        arithmetic up to rounding (the four-bar's without an atan2, so that its speeds may
+        run on the compiled lanes, :mod:`optdesign.numerics.native_lanes`). The screening
+        only ranks designs, each verified on the model itself before anything is claimed of
+        it."""
+        return self.chain_expressions(phi, p, count, options)
+
     #: the design ``optdesign init`` writes ({"input_speed": ..., "design": {...}}): one that
     #: assembles over the whole turn, its lengths to optimise freed over ranges that hold it;
     #: None: ``init`` refuses this mechanism
@@ -109,19 +120,26 @@ class Mechanism(ABC):
 
     # ----------------------------------------------------------------- built once
     @lru_cache(maxsize=64)
-    def symbolic(self, count: int, options: tuple[tuple[str, str], ...] = ()) -> tuple:
+    def symbolic(self, count: int, options: tuple[tuple[str, str], ...] = (),
+                 screening: bool = False) -> tuple:
         """(φ, p, p by name, model): :meth:`chain_expressions` on symbols of its own, with
         ``dtheta`` = dθ/dφ1 and ``ddtheta`` = d²θ/dφ1² (a column each) by algorithmic
         differentiation. Built once per count and shared by the functions made from it
         (:meth:`kinematics`, :meth:`joints`, the quantities'): each holds the nodes its own
-        outputs need, so its arithmetic is what a model of its own gives."""
+        outputs need, so its arithmetic is what a model of its own gives. ``screening``: the
+        same of :meth:`screening_expressions`, where a mechanism writes them otherwise (no
+        ``ddtheta``: the speeds do not read it)."""
         opts = self.default_options() | dict(options)
+        if screening and type(self).screening_expressions is Mechanism.screening_expressions:
+            return self.symbolic(count, options)        # the same model: built once
         phi = ca.SX.sym("phi")
         pvec = ca.SX.sym("p", len(self.lengths))
         p = {name: pvec[i] for i, name in enumerate(self.lengths)}
-        model = dict(self.chain_expressions(phi, p, count, opts))
+        chains = self.screening_expressions if screening else self.chain_expressions
+        model = dict(chains(phi, p, count, opts))
         model["dtheta"] = ca.jacobian(ca.vertcat(*model["theta"]), phi)
-        model["ddtheta"] = ca.jacobian(model["dtheta"], phi)
+        if not screening:
+            model["ddtheta"] = ca.jacobian(model["dtheta"], phi)
         return phi, pvec, p, model
 
     @lru_cache(maxsize=64)
@@ -151,18 +169,20 @@ class Mechanism(ABC):
     @lru_cache(maxsize=64)
     def speeds(self, count: int, options: tuple[tuple[str, str], ...] = ()) -> ca.Function:
         """``casadi.Function`` (phi, p) -> (dtheta, cos_mu): the lean part of
-        :meth:`kinematics` that screening thousands of designs needs."""
-        full = self.kinematics(count, options)
-        phi = ca.SX.sym("phi")
-        pvec = ca.SX.sym("p", len(self.lengths))
-        _, dtheta, _, cos_mu = full(phi, pvec)
-        return ca.Function(f"{self.name}_speeds_n{count}", [phi, pvec], [dtheta, cos_mu],
+        :meth:`kinematics` that screening thousands of designs needs, made from
+        :meth:`screening_expressions` (the model's own chains unless a mechanism writes
+        them otherwise there)."""
+        phi, pvec, _, model = self.symbolic(count, options, screening=True)
+        return ca.Function(f"{self.name}_speeds_n{count}", [phi, pvec],
+                           [model["dtheta"], ca.vertcat(*model["cos_mu"])],
                            ["phi", "p"], ["dtheta", "cos_mu"])
 
     @lru_cache(maxsize=64)
-    def kinematic_lanes(self, count: int, options: tuple[tuple[str, str], ...] = ()) -> Lanes:
-        """:meth:`kinematics` as NumPy lanes, for grids of many crank angles."""
-        return Lanes(self.kinematics(count, options))
+    def kinematic_lanes(self, count: int, options: tuple[tuple[str, str], ...] = ()):
+        """:meth:`kinematics` as NumPy lanes, for grids of many crank angles: each rocker
+        angle θ_k taken by NumPy from the two legs of its atan2, the rest on the lanes
+        (:mod:`optdesign.numerics.angle_lanes`: free of atan2, they may run compiled)."""
+        return angle_lanes(self.kinematics(count, options))
 
     @lru_cache(maxsize=64)
     def speed_lanes(self, count: int, options: tuple[tuple[str, str], ...] = ()) -> Lanes:

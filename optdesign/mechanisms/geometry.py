@@ -5,6 +5,8 @@ Written with atan2 and the discriminant instead of arccos, whose derivative blow
 """
 from __future__ import annotations
 
+import math
+
 import casadi as ca
 
 #: Floor under the squared half-chord inside ``sqrt``: keeps values and derivatives finite
@@ -53,3 +55,18 @@ def angle_of(vector):
 def unit(angle):
     """The unit vector (cos angle, sin angle)."""
     return ca.vertcat(ca.cos(angle), ca.sin(angle))
+
+
+def direction(vector):
+    """The unit vector along a 2-vector: (cos α, sin α) of its direction α = atan2(y, x),
+    without the angle itself (no atan2, whose SIMD and C-library values differ in the last
+    bit on some machines: a function free of it runs on the compiled lanes,
+    :mod:`optdesign.numerics.native_lanes`)."""
+    return vector / ca.sqrt(ca.dot(vector, vector))
+
+
+def rotated(vector, angle: float):
+    """A 2-vector turned by a fixed ``angle`` (a number): (x cos a − y sin a, x sin a + y cos a);
+    ``rotated(direction(v), a)`` is ``unit(angle_of(v) + a)``."""
+    c, s = math.cos(angle), math.sin(angle)
+    return ca.vertcat(c * vector[0] - s * vector[1], s * vector[0] + c * vector[1])

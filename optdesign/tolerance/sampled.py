@@ -1,7 +1,8 @@
 """Thousands of parts at once: δ, ratio, least transmission angle and assembly on a crank grid.
 
 The mechanism's speed function runs as NumPy lanes over parts × crank samples, exactly as the
-solve's screening runs it (:meth:`~optdesign.mechanisms.base.Mechanism.speeds_at_once`, the same model).
+solve's screening runs it (:meth:`~optdesign.mechanisms.base.Mechanism.speeds_at_once`: the
+model's chains in the screening's form, the same arithmetic up to rounding).
 A screening only ranks designs; a part differs from its nominal by a few hundredths of a mm,
 so here every figure is refined between the samples. Between samples j and j + 1 each curve
 is the cubic through its samples j-1 .. j+2 (error O(h⁴)), and

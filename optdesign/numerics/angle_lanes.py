@@ -30,8 +30,16 @@ class AngleLanes:
         self.fn = fn
         #: (y, x, the other outputs): the function the lanes evaluate
         self.legs = Lanes(legs)
-        self.native = self.legs.native
         self.instructions = self.legs.instructions
+
+    @property
+    def native(self):
+        """The legs' compiled loop (None: the NumPy statements run)."""
+        return self.legs.native
+
+    @native.setter
+    def native(self, loop) -> None:
+        self.legs.native = loop
 
     def __call__(self, *args) -> list[np.ndarray]:
         y, x, *rest = self.legs(*args)

@@ -123,6 +123,20 @@ def _valid(mechanism: str, name: str, lower: float, upper: float, problem):
 def build(draw: Draw):
     """The problem of ``draw`` (a loaded Problem), its bounds at quantiles of each bounded
     quantity over a sample of the box (a quantile beyond 0..1 puts the bound out of reach)."""
+    return loaded(build_data(draw))
+
+
+def loaded(data: dict):
+    """The Problem of a draw's problem data (:func:`build_data`)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return problem_from_dict(copy.deepcopy(data), where=f"{data['name']}.yaml")
+
+
+def build_data(draw: Draw) -> dict:
+    """The problem file's data of ``draw`` (:func:`build`): its bounds read off the screening's
+    sampled values of the box, so the code that screens decides their last bits (a comparison
+    of two commits draws the problems once, with one of them: ``solve_answers_ab.py``)."""
     data = problem_data(draw)
     with warnings.catch_warnings():     # a widened box under 1 mm warns "metres?"
         warnings.simplefilter("ignore")
@@ -152,9 +166,7 @@ def build(draw: Draw):
             if ripple is not None and np.isfinite(ripple).any() else 0.5
         data["objective"]["max_ripple"] = max(cap, 1e-3)
         constraints.pop("ripple", None)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return problem_from_dict(data, where=f"{data['name']}.yaml")
+    return data
 
 
 def _sampled_values(problem, names) -> dict:

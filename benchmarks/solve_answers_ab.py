@@ -3,8 +3,11 @@ the solver find better designs or worse ones, change a status, and at what cost 
 
 The oracle's draws (``--problems``, ``--seed``, ``--mechanisms``: the same draws as
 ``benchmarks/solve_oracle.py``) are solved with the code of ``--base`` (a git worktree in a
-temporary folder, given this tree's benchmark scripts, so that both trees solve the very same
-problems) and with the working tree, in two processes at once (one per core). The answers are
+temporary folder, given this tree's benchmark scripts) and with the working tree, both on the
+very same problems: drawn once, by this tree's code, and handed to both (the oracle reads its
+bounds off the screening's sampled values of the box, so a change of the screening would
+otherwise move the problems' bounds in their last bits, and the answers of the few problems
+that hang on a bound's last bit with them), in two processes at once (one per core). The answers are
 compared on the problem's own objective (the exact key of each: lower is better; "better" is
 the working tree's); per tree, the statuses, the `optimal` answers that rest on no converged
 polish (a design where a polish stopped, or a screened one) and the time of all solves.
@@ -43,20 +46,38 @@ SCRIPTS = ("oracle.py", "solve_perturbation.py", "solve_answers_ab.py")
 
 def tree_rows(args) -> None:
     """Solve the draws of ``args`` with this process's tree (``ROOT``), rows to ``--_out``."""
-    import numpy as np
-
     import oracle
     import optdesign
     from solve_perturbation import answer_rows
 
     print(f"{args._tree}: the code of {Path(optdesign.__file__).parent}", flush=True)
+    draws = drawn(args)
+    data = json.loads(Path(args._problems).read_text())
+    answer_rows(args._tree, draws, Path(args._out),
+                build=lambda draw: oracle.loaded(data[str(draw.seed)]))
+
+
+def drawn(args) -> list:
+    """The oracle's draws of ``args`` (its mechanisms only)."""
+    import numpy as np
+
+    import oracle
+
     rng = np.random.default_rng(args.seed)
-    draws = [d for d in (oracle.random_draw(rng, i) for i in range(args.problems))
-             if d.mechanism in args.mechanisms]
-    answer_rows(args._tree, draws, Path(args._out))
+    return [d for d in (oracle.random_draw(rng, i) for i in range(args.problems))
+            if d.mechanism in args.mechanisms]
 
 
-def in_both_trees(base: Path, args, paths: dict) -> bool:
+def problems_file(args, path: Path) -> None:
+    """The problem data of every draw, made once by this tree's code, to ``path``: the
+    oracle reads its bounds off the screening's sampled values, so a change of the
+    screening would change the problems too, and both trees must solve the very same ones."""
+    import oracle
+
+    path.write_text(json.dumps({str(d.seed): oracle.build_data(d) for d in drawn(args)}))
+
+
+def in_both_trees(base: Path, args, paths: dict, problems: Path) -> bool:
     """Each tree's solves (its own copy of this script), both at once; whether both ended
     well."""
     from solve_perturbation import solving_env
@@ -68,7 +89,8 @@ def in_both_trees(base: Path, args, paths: dict) -> bool:
         for name, tree in (("base", base), ("head", ROOT)):
             children.append(subprocess.Popen(
                 [sys.executable, str(tree / "benchmarks" / "solve_answers_ab.py"), "--_tree",
-                 name, "--_out", str(paths[name]), "--problems", str(args.problems),
+                 name, "--_out", str(paths[name]), "--_problems", str(problems),
+                 "--problems", str(args.problems),
                  "--seed", str(args.seed), "--mechanisms", *args.mechanisms, "--base",
                  args.base], cwd=tree, env=env))
         return all([c.wait() == 0 for c in children])
@@ -116,6 +138,7 @@ def main(argv=None) -> int:
                     help="the results files' name (benchmarks/results/NAME.md, ...)")
     ap.add_argument("--_tree", choices=TREES, help=argparse.SUPPRESS)
     ap.add_argument("--_out", help=argparse.SUPPRESS)
+    ap.add_argument("--_problems", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if not 1 <= args.problems <= 10_000:
         ap.error("--problems must be 1 to 10000")
@@ -137,7 +160,9 @@ def main(argv=None) -> int:
         try:
             for script in SCRIPTS:
                 shutil.copy2(ROOT / "benchmarks" / script, base / "benchmarks" / script)
-            ok = in_both_trees(base, args, paths)
+            problems = Path(tmp) / "problems.json"
+            problems_file(args, problems)
+            ok = in_both_trees(base, args, paths, problems)
         finally:
             subprocess.run(["git", "worktree", "remove", "--force", str(base)], cwd=ROOT)
     if not ok:

@@ -122,10 +122,11 @@ def mode_rows(mode: str, problems: int, seed: int, path: Path) -> None:
     answer_rows(mode, [oracle.random_draw(rng, i) for i in range(problems)], path)
 
 
-def answer_rows(label: str, draws, path: Path, prepare=None) -> None:
-    """Solve each of the oracle's ``draws`` (its problem passed through ``prepare`` first,
-    where given), a row per problem (the exact key of the answer: lower is better) appended
-    to ``path`` as it comes; the rows there already are kept, their draws not solved again.
+def answer_rows(label: str, draws, path: Path, prepare=None, build=None) -> None:
+    """Solve each of the oracle's ``draws`` (its problem made by ``build``, default
+    ``oracle.build``, and passed through ``prepare`` first, where given), a row per problem
+    (the exact key of the answer: lower is better) appended to ``path`` as it comes; the rows
+    there already are kept, their draws not solved again.
     ``converged``: the polishes that converged to a design meeting every constraint, over
     the counts (0: the answer is a design where a polish stopped, or a screened one)."""
     import oracle
@@ -136,7 +137,7 @@ def answer_rows(label: str, draws, path: Path, prepare=None) -> None:
     for draw in draws[len(rows):]:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            problem = oracle.build(draw)
+            problem = (build or oracle.build)(draw)
             if prepare is not None:
                 problem = prepare(problem)
             t0 = time.perf_counter()

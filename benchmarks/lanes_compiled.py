@@ -5,9 +5,11 @@ grids) and speeds (dθ/dφ and cos μ: the screening) at 6 and 24 phases, called
 (a design's exact grid), 4 096 (the accuracy record's finer grid) and 40 000 lanes (a
 screening's), crank angles and lengths drawn at random (some designs do not assemble), on one
 thread and on two (``lanes.threads(2)``, as a solve's screening calls them: the NumPy passes
-share the interpreter, the compiled halves run at once). Both run in this process from the
-same :class:`~optdesign.numerics.lanes.Lanes`, alternating, medians of ``--rounds``; "same
-bits" compares every output of every call. The libraries are built first (the builder
+share the interpreter, the compiled halves run at once). The NumPy statements are the whole
+function's :class:`~optdesign.numerics.lanes.Lanes`; the compiled lanes are what the solve
+runs (:func:`~optdesign.numerics.angle_lanes.angle_lanes`: a kinematics cut at its atan2,
+the angles taken by NumPy between compiled stages). Both run in this process, alternating,
+medians of ``--rounds``; "same bits" compares every output of every call. The libraries are built first (the builder
 process of ``optdesign warm-up``) into the user's cache.
 
     python benchmarks/lanes_compiled.py [--rounds 7]
@@ -31,6 +33,7 @@ sys.path.insert(0, str(ROOT))
 from optdesign.mechanisms import get_mechanism  # noqa: E402
 from optdesign.numerics import c_library, native_lanes, user_cache  # noqa: E402
 from optdesign.numerics import lanes as lanes_module  # noqa: E402
+from optdesign.numerics.angle_lanes import angle_lanes, lane_functions  # noqa: E402
 from optdesign.numerics.lanes import Lanes  # noqa: E402
 from optdesign.outputs.atomic import atomic_write_text  # noqa: E402
 
@@ -53,10 +56,11 @@ def timed(call, rounds: int) -> tuple[float, list]:
 def measure(name: str, what: str, count: int, rounds: int) -> list[dict]:
     """The rows of one function: one per lane count and thread count."""
     fn = getattr(get_mechanism(name), what)(count, ())
-    lanes = Lanes(fn)
+    statements = Lanes(fn)                   # the whole function's NumPy statements
+    statements.native = None
+    lanes = angle_lanes(fn)                  # cut at its atan2, where it has any
     if lanes.native is None:
         return []
-    native = lanes.native
     rng = np.random.default_rng(count)
     rows = []
     for n in LANES:
@@ -64,9 +68,7 @@ def measure(name: str, what: str, count: int, rounds: int) -> list[dict]:
         p = rng.uniform(0.3, 3.0, (fn.nnz_in(1), n)) * 100.0
         for threads in (1, 2):
             with lanes_module.threads(threads):
-                lanes.native = None
-                numpy_s, a = timed(lambda: lanes(phi, p), rounds)
-                lanes.native = native
+                numpy_s, a = timed(lambda: statements(phi, p), rounds)
                 compiled_s, b = timed(lambda: lanes(phi, p), rounds)
             rows.append({"function": fn.name(), "lanes": n, "threads": threads,
                          "numpy_ms": 1e3 * numpy_s, "compiled_ms": 1e3 * compiled_s,
@@ -102,7 +104,7 @@ def main(argv=None) -> int:
         return 1
     functions = [getattr(get_mechanism(m), w)(c, ()) for m in MECHANISMS
                  for c in COUNTS for w in ("kinematics", "speeds")]
-    recipes = [native_lanes.recipe(fn, fn.serialize()) for fn in functions]
+    recipes = [native_lanes.recipe(f, text) for fn in functions for f, text in lane_functions(fn)]
     for rec, path, _, note in c_library.warm_up(recipes, where, 2):
         if path is None:
             print(f"{rec.function.name()}: not compiled ({note})", file=sys.stderr)

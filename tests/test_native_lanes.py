@@ -16,6 +16,7 @@ import pytest
 from optdesign.commands.warmup import lanes_recipes_of
 from optdesign.mechanisms import get_mechanism, known
 from optdesign.numerics import c_library, lanes as lanes_module, native_lanes, user_cache
+from optdesign.numerics.angle_lanes import angle_lanes, lane_functions
 from optdesign.numerics.lanes import Lanes
 from optdesign.problem.loader import problem_from_dict
 from optdesign.solver import built as kept_nlps, solve
@@ -47,6 +48,8 @@ def cache(tmp_path_factory):
         where = user_cache.folder()
         recipes = [native_lanes.recipe(fn, fn.serialize())
                    for fn in (function(*f) for f in FUNCTIONS)]
+        recipes += [native_lanes.recipe(fn, text) for name in known()
+                    for fn, text in lane_functions(function(name, "kinematics"))]
         recipes += [rec for _, rec in lanes_recipes_of(vergov())]
         for rec, path, _, note in c_library.warm_up(recipes, where):
             assert path is not None, note
@@ -216,27 +219,30 @@ def test_a_missing_library_is_built_beside_and_loaded_next_time(tmp_path, monkey
 
 def test_a_compiled_call_of_an_exact_grid_is_shared_between_two_threads(loaded, monkeypatch):
     """Compiled lanes run without the interpreter: a solve shares a call of enough work (a
-    design's exact grid of the four-bar's kinematics) between its two threads, with the same
-    values; a shorter call is not worth a thread's start."""
+    design's exact grid of the four-bar's kinematics: its last stage, after the coupler's
+    angle) between its two threads, with the same values; a shorter call is not worth a
+    thread's start."""
     import threading
 
-    lanes = Lanes(function("fourbar_converter", "kinematics"))
-    if lanes.native is None:
+    kinematics = angle_lanes(function("fourbar_converter", "kinematics"))
+    if kinematics.native is None:
         pytest.skip("no compiled lanes on this machine")
+    last = kinematics.stages[-1]
     started = []
     start = threading.Thread.start
     monkeypatch.setattr(threading.Thread, "start",
                         lambda self: (started.append(self.name), start(self))[1])
     rng = np.random.default_rng(3)
-    least = -(-lanes_module.NATIVE_SHARED_WORK // lanes.instructions)     # lanes, rounded up
+    least = -(-lanes_module.NATIVE_SHARED_WORK // last.instructions)     # lanes, rounded up
     assert least <= 1024                                    # an exact grid is shared
+    assert kinematics.stages[0].instructions * 1024 < lanes_module.NATIVE_SHARED_WORK
     for count, helpers in ((least, 1), (least - 1, 0)):
         phi = rng.uniform(0.0, 2 * np.pi, (1, count))
         p = np.array([[225.0], [20.0], [225.0], [100.0], [56.0]])
-        alone = lanes(phi, p)
+        alone = kinematics(phi, p)
         assert started == []                                # not asked: one thread
         with lanes_module.threads(2):
-            shared = lanes(phi, p)
+            shared = kinematics(phi, p)
         assert started == ["lanes"] * helpers
         assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(alone, shared))
         started.clear()

@@ -81,16 +81,18 @@ def lanes_recipes_of(problem) -> list[tuple]:
     admissible count's kinematics (the exact evaluator's grids) and speeds (the screening)."""
     from optdesign.evaluation.design import Design
     from optdesign.numerics import native_lanes
-    from optdesign.numerics.angle_lanes import legs_of
+    from optdesign.numerics.angle_lanes import lane_functions
 
     out = []
     for count in problem.counts():
         design = Design.from_problem(problem, {problem.model.count_variable: count})
         model, options = design.model, design.option_key
-        kinematics = model.kinematics(count, options)
-        # the kinematics' lanes run its angles' legs (optdesign.numerics.angle_lanes)
-        for what, fn in (("kinematics", legs_of(kinematics) or kinematics),
-                         ("speeds", model.speeds(count, options))):
-            out.append((f"{problem.model.count_variable} = {count}, {what} lanes",
-                        native_lanes.recipe(fn, fn.serialize())))
+        speeds = model.speeds(count, options)
+        # the kinematics' lanes run in stages cut at its atan2 (optdesign.numerics.angle_lanes)
+        for what, functions in (("kinematics", lane_functions(model.kinematics(count, options))),
+                                ("speeds", [(speeds, speeds.serialize())])):
+            for k, (fn, text) in enumerate(functions):
+                stage = f" (stage {k + 1} of {len(functions)})" if len(functions) > 1 else ""
+                out.append((f"{problem.model.count_variable} = {count}, {what} lanes{stage}",
+                            native_lanes.recipe(fn, text)))
     return out

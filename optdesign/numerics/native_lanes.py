@@ -1,11 +1,11 @@
-"""The lanes' function compiled to C: the same values to the bit, 1.4 to 3.9 times faster.
+"""The lanes' function compiled to C: the same values to the bit, up to 5 times faster.
 
 The NumPy lanes (:mod:`optdesign.numerics.lanes`) apply each instruction of an SX function to
 a whole array of inputs: one pass over memory per instruction, a few thousand passes per
 call. The same function generated as C by CasADi and run lane by lane
 (:data:`optdesign.numerics.c_library.LANES_DRIVER`) keeps every lane's intermediates in the
-processor's registers and cache: on one thread the mechanisms' kinematics 2.0 to 3.9 times
-faster, their speeds 1.4 to 3.2 times (``benchmarks/lanes_compiled.py``), and, as ``ctypes``
+processor's registers and cache: on one thread the mechanisms' kinematics 1.9 to 5.0 times
+faster, their speeds 0.9 to 3.5 times (``benchmarks/lanes_compiled.py``), and, as ``ctypes``
 lets go of the interpreter while it runs, two threads share a call's lanes truly at once.
 
 The values are the NumPy lanes' to the bit where the elementary functions agree: the C code

@@ -40,10 +40,11 @@ def recipe_of(problem) -> compiled.Recipe:
 
 def nlp_files(where) -> list[str]:
     """The names of the NLPs' files in the cache folder (the lanes' code, compiled and not,
-    and the Sobol samples kept beside them, numerics/lanes.py, numerics/native_lanes.py and
-    numerics/sobol.py, aside)."""
+    the kinematics' stages and the Sobol samples kept beside them, numerics/lanes.py,
+    numerics/native_lanes.py, numerics/angle_lanes.py and numerics/sobol.py, aside)."""
     return sorted(p.name for p in where.iterdir()
-                  if not p.name.startswith(("lanes-", "sobol-", "native-lanes-")))
+                  if not p.name.startswith(("lanes-", "sobol-", "native-lanes-",
+                                            "angle-stages-")))
 
 
 def wait_for_build(where, name, timeout=300.0) -> None:

@@ -13,7 +13,7 @@ the working tree's); per tree, the statuses, the `optimal` answers that rest on 
 polish (a design where a polish stopped, or a screened one) and the time of all solves.
 
     python benchmarks/solve_answers_ab.py --base 84c47e9 [--problems 300] [--seed 0]
-        [--mechanisms fourbar_converter slotted_lever pulse_reducer] [--resume]
+        [--mechanisms fourbar_converter slotted_lever pulse_reducer] [--resume] [--table-only]
 
 Writes benchmarks/results/solve_answers_ab.md and .json (each tree's rows also in
 ``solve_answers_ab_<tree>.json`` as they come: ``--resume`` goes on from them); ``--name N``
@@ -124,7 +124,18 @@ def table(rows: dict, summary: list[dict], moved: list[dict], base: str) -> str:
              f"{MOVED:g} (relative); better or worse for head.", ""]
     lines += tree_lines(rows) + [""] + summary_lines(summary) + [""]
     lines += moved_lines(moved, "head", 30, first="base")
+    same = same_to_the_bit(rows["base"], rows["head"])
+    lines += ["", f"The same to the bit in both trees (status, the objective's exact key and "
+                  f"the IPOPT iterations): {same} of {len(rows['base'])} answers."]
     return "\n".join(lines) + "\n"
+
+
+def same_to_the_bit(base: list[dict], head: list[dict]) -> int:
+    """How many answers the two trees give alike in status, exact key and iterations (the
+    keys as JSON keeps them: every bit of a float)."""
+    return sum(1 for a, b in zip(base, head, strict=True)
+               if (a["status"], a["key"], a["iterations"]) ==
+               (b["status"], b["key"], b["iterations"]))
 
 
 def main(argv=None) -> int:
@@ -139,6 +150,8 @@ def main(argv=None) -> int:
     ap.add_argument("--_tree", choices=TREES, help=argparse.SUPPRESS)
     ap.add_argument("--_out", help=argparse.SUPPRESS)
     ap.add_argument("--_problems", help=argparse.SUPPRESS)
+    ap.add_argument("--table-only", action="store_true",
+                    help="write the tables again from the rows of the last run, solving nothing")
     args = ap.parse_args(argv)
     if not 1 <= args.problems <= 10_000:
         ap.error("--problems must be 1 to 10000")
@@ -148,6 +161,10 @@ def main(argv=None) -> int:
     if not re.fullmatch(r"[A-Za-z0-9_-]{1,64}", args.name):
         ap.error("--name must be 1 to 64 letters, digits, '_' or '-'")
     paths = {name: RESULTS / f"{args.name}_{name}.json" for name in TREES}
+    if args.table_only:
+        if not all(p.exists() for p in paths.values()):
+            ap.error(f"no rows of a run named {args.name} to write the tables from")
+        return _write(args, paths)
     if not args.resume:
         for path in paths.values():
             path.unlink(missing_ok=True)
@@ -168,14 +185,25 @@ def main(argv=None) -> int:
     if not ok:
         print("a tree's solves failed", file=sys.stderr)
         return 1
+    return _write(args, paths)
+
+
+def _write(args, paths: dict) -> int:
+    """The comparison's tables and JSON from each tree's rows (``--table-only``: dated as the
+    run that made them)."""
     from solve_perturbation import compare, write_results
 
     rows = {name: json.loads(p.read_text()) for name, p in paths.items()}
     summary, moved = compare(rows["base"], rows["head"])
+    when = None
+    if args.table_only and (RESULTS / f"{args.name}.json").exists():
+        when = json.loads((RESULTS / f"{args.name}.json").read_text())["meta"]["time"]
     write_results(args.name,
                   {"base": args.base, "seed": args.seed, "problems": args.problems,
                    "mechanisms": args.mechanisms},
-                  {"summary": summary, "moved": moved}, table(rows, summary, moved, args.base))
+                  {"summary": summary, "moved": moved,
+                   "same_to_the_bit": same_to_the_bit(rows["base"], rows["head"])},
+                  table(rows, summary, moved, args.base), when)
     return 0
 
 

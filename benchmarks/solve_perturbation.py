@@ -243,11 +243,14 @@ def table(floors: list[dict], summary: list[dict], moved: list[dict], rounds: in
     return "\n".join(lines) + "\n"
 
 
-def write_results(name: str, settings: dict, document: dict, text: str) -> None:
-    """``benchmarks/results/<name>.json`` (``meta``: when, on what, and ``settings``; then
-    ``document``) and ``<name>.md`` (``text``), each written atomically; ``text`` printed.
-    The oracle's A/B benchmarks (this one, solve_denser, solve_answers_ab) end alike."""
-    meta = {"time": time.strftime("%Y-%m-%d %H:%M:%S"), "python": platform.python_version(),
+def write_results(name: str, settings: dict, document: dict, text: str,
+                  when: str | None = None) -> None:
+    """``benchmarks/results/<name>.json`` (``meta``: when (now, or ``when``: the tables of a
+    run written again), on what, and ``settings``; then ``document``) and ``<name>.md``
+    (``text``), each written atomically; ``text`` printed. The oracle's A/B benchmarks (this
+    one, solve_denser, solve_answers_ab) end alike."""
+    meta = {"time": when or time.strftime("%Y-%m-%d %H:%M:%S"),
+            "python": platform.python_version(),
             "machine": f"{platform.machine()} {platform.system()}"} | settings
     atomic_write_text(RESULTS / f"{name}.json",
                       json.dumps({"meta": meta} | document, indent=1))

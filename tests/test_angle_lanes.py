@@ -108,6 +108,19 @@ def test_the_cut_is_kept_and_read_back(tmp_path, monkeypatch):
     assert [t for _, t in lane_functions(fn)] == list(made.texts)
 
 
+def test_a_function_without_atan2_is_kept_as_such(tmp_path, monkeypatch):
+    """The pulse reducer's kinematics hold no atan2: kept so, a second process reads that
+    and makes no split (nor writes the file again)."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    fn = get_mechanism("pulse_reducer").kinematics(3, ())
+    assert kept_split(fn) is None
+    [kept] = user_cache.folder().glob("angle-stages-*.json")
+    written = kept.stat().st_mtime_ns
+    monkeypatch.setattr("optdesign.numerics.angle_lanes.split",
+                        lambda fn: pytest.fail("split again"))
+    assert kept_split(fn) is None and kept.stat().st_mtime_ns == written
+
+
 def test_without_a_cache_the_whole_function_runs_on_the_lanes(monkeypatch):
     monkeypatch.setenv(user_cache.VARIABLE, "off")
     fn = get_mechanism("fourbar_converter").kinematics(3, ())

@@ -128,6 +128,8 @@ def kept_split(fn: ca.Function) -> Split | None:
     if body is not None:
         try:
             kept = json.loads(body)
+            if kept["stages"] is None:          # no atan2 in it: its plain lanes
+                return None
             return Split(tuple(ca.Function.deserialize(t) for t in kept["stages"]),
                          tuple(tuple(p) for p in kept["places"]), tuple(kept["stages"]))
         except (ValueError, KeyError, TypeError, RuntimeError):

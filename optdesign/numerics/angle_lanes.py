@@ -15,10 +15,10 @@ the very operations the NumPy lanes of the whole function make, on the same oper
 values are the same to the bit whichever loop ran each stage (``tests/test_angle_lanes.py``),
 and stages free of atan2 run compiled where sine and cosine agree with the C library's.
 
-The stages are rebuilt instruction by instruction from the function's algorithm (a few
-hundredths of a second for the kinematics of 24 chains), once per function: they are kept in
-the user's cache folder as CasADi writes them, named by a digest of the function, of this
-module's text and of CasADi's version, so a later process reads them (a few milliseconds).
+The stages are rebuilt instruction by instruction from the function's algorithm, once per
+function: they are kept in the user's cache folder as CasADi writes them, named by a digest of
+the function, of this module's text and of CasADi's version, so a later process reads them
+instead.
 Under ``OPTDESIGN_COMPILE=off`` (no cache folder in use, nothing compiled) the whole function
 runs on the NumPy lanes: the same values.
 """

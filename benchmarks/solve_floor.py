@@ -21,8 +21,11 @@ Per problem of the race (``benchmarks/solve_vs_peers.py``'s ``CASES``):
   each summed over the solve's processes, and of these the seconds spent in a process beside
   the solve's own at the same time (``beside``: the best basins polished at once); the rest
   is the sensitivities, the accuracy record, the bookkeeping and the solving process's wait
-  for a polish beside it to end) and the IPOPT iterations
-  of the winning run against all of the solve's;
+  for a polish beside it to end), the IPOPT iterations
+  of the winning run against all of the solve's, and the CPU seconds of every process of
+  the warm solve (the solving one's and those it forked, each waited for as it exits)
+  against the floor, which runs on one core: on two cores the warm solve is at least half
+  that ratio times the floor, however its work is laid out;
 * **the same solve again**: one more call with that memory kept, as a notebook that solves
   the same file twice runs it (the exact checks of the designs the solve before checked are
   read from it);
@@ -58,7 +61,8 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from optdesign.outputs.atomic import atomic_write_text  # noqa: E402
-from solve_vs_peers import CASES, load_case, one_check_seconds, timed_solve  # noqa: E402
+from solve_vs_peers import (CASES, cpu_seconds, load_case, one_check_seconds,  # noqa: E402
+                            timed_solve)
 
 RESULTS = ROOT / "benchmarks" / "results"
 STAGES = ("build", "screening", "ipopt", "verification")
@@ -131,7 +135,10 @@ def child(case: str, repeats: int) -> dict:
     warm = []
     for _ in range(repeats):
         forget()
+        cpu0 = cpu_seconds()
         warm.append(timed_solve(problem)[1])
+        reaped()
+        warm[-1]["cpu_every_process_s"] = cpu_seconds() - cpu0
     again = timed_solve(problem)[1]             # the memory of the solve before kept
     answer = answer_phase(problem, result)
     # a solve of several counts polishes each: the floor of each count's own winning run
@@ -143,6 +150,17 @@ def child(case: str, repeats: int) -> dict:
             "optimal_counts": len(each),
             "imports_s": imports,
             "mode": compiled.mode(), "compiled_nlps": sum(loaded), "nlps": len(loaded)}
+
+
+def reaped(most_s: float = 10.0) -> None:
+    """Wait (up to ``most_s``) for the processes a solve forked beside itself to end, so that
+    their CPU seconds count in this process's children's (``resource.RUSAGE_CHILDREN``): a
+    solve does not wait for a process that has sent its answer as it exits."""
+    import multiprocessing
+
+    end = time.perf_counter() + most_s
+    while multiprocessing.active_children() and time.perf_counter() < end:
+        time.sleep(0.001)
 
 
 def run_child(case: str, mode: str, repeats: int) -> dict:
@@ -196,6 +214,7 @@ def summary(runs: list[dict]) -> dict:
             "again_s": statistics.median(r["again"]["time_s"] for r in runs),
             "stages_s": {k: statistics.median(w["timings"][k] for w in warm) for k in STAGES},
             "beside_s": statistics.median(w["timings"].get("beside", 0.0) for w in warm),
+            "cpu_s": statistics.median(w.get("cpu_every_process_s", math.nan) for w in warm),
             "floor_s": statistics.median(r["floor"]["floor_s"] for r in runs),
             "floor_every_count_s": statistics.median(
                 r.get("floor_every_count_s", r["floor"]["floor_s"]) for r in runs),
@@ -232,8 +251,8 @@ def tables(results: dict) -> str:
                         if counts > 1 else "1 | – |") + f" {c['again_s']:.3f} |")
     lines += ["", "| problem | floor: IPOPT + check [ms] | build | screening | IPOPT | "
               "verification | of these, in a process beside the solve's | rest | IPOPT "
-              "iterations: winning run / solve |",
-              "|---|---|---|---|---|---|---|---|---|"]
+              "iterations: winning run / solve | CPU of every process [ms] | CPU / floor |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for case, r in results.items():
         c = r["compiled"]
         stages = [1e3 * c["stages_s"][k] for k in STAGES]
@@ -242,7 +261,9 @@ def tables(results: dict) -> str:
         lines.append(f"| {case} | {1e3 * c['floor_ipopt_s']:.0f} + "
                      f"{1e3 * c['floor_check_s']:.0f} | "
                      + " | ".join(f"{s:.0f}" for s in stages) + f" | {beside:.0f} | {rest:.0f} | "
-                     f"{c['winning_iterations']} / {c['iterations']} |")
+                     f"{c['winning_iterations']} / {c['iterations']} | "
+                     f"{1e3 * c.get('cpu_s', math.nan):.0f} | "
+                     f"{c.get('cpu_s', math.nan) / c['floor_s']:.1f}× |")
     lines += ["", "| problem | warm, virtual machine [s] | warm, compiled [s] | VM / compiled "
               "| first, virtual machine [s] | first, compiled [s] | floor, VM [ms] | NLPs on a "
               "library (main process) | same answer |", "|---|---|---|---|---|---|---|---|---|"]

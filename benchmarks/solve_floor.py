@@ -23,7 +23,8 @@ Per problem of the race (``benchmarks/solve_vs_peers.py``'s ``CASES``):
   is the sensitivities, the accuracy record, the bookkeeping and the solving process's wait
   for a polish beside it to end), the IPOPT iterations
   of the winning run against all of the solve's, and the CPU seconds of every process of
-  the warm solve (the solving one's and those it forked, each waited for as it exits)
+  the warm solve (the solving one's and those it forked, each waited for as it exits, so
+  the next warm solve no longer begins beside the last one's exiting processes)
   against the floor, which runs on one core: on two cores the warm solve is at least half
   that ratio times the floor, however its work is laid out;
 * **the same solve again**: one more call with that memory kept, as a notebook that solves

@@ -12,6 +12,7 @@ when |AC_i| = l2 - l2' (A, C1, B1 collinear, so every rod C_iB_i is l2' long, C1
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import casadi as ca
 import numpy as np
@@ -19,8 +20,7 @@ import numpy as np
 from optdesign.declarations import Key
 from optdesign.errors import ProblemError
 from optdesign.mechanisms.base import Mechanism, OptionSpec, VariableSpec
-from optdesign.mechanisms.geometry import (angle_of, circle_intersection, direction, rotated,
-                                           unit)
+from optdesign.mechanisms.geometry import angle_of, circle_intersection, direction, unit
 from optdesign.quantities.criteria import LengthConstraint
 
 BRANCH_SIGN = {"left": 1, "right": -1}
@@ -76,21 +76,20 @@ class FourBarConverter(Mechanism):
         o1 = ca.vertcat(l0, 0)
         b1, cos_mu1 = circle_intersection(a, l2, o1, l3, sign)         # four-bar O A B1 O1
         if coupler_angle:
-            phi2 = angle_of(b1 - a)
+            lead = angle_of(b1 - a)                                    # φ2, eq. (4)
         else:                           # (cos φ2, sin φ2), read off the arm AB1 itself
-            u2 = direction(b1 - a)
+            lead = direction(b1 - a)
         theta = [angle_of(b1 - o1)]
         cos_mu = [cos_mu1]
         joints = {"O": ca.vertcat(0, 0), "A": a, "O1": o1, "B1": b1}
         links = [("O", "A"), ("A", "B1"), ("O1", "B1")]
+        rocker = _rocker(coupler_angle, sign)
         for i in range(2, count + 1):
             angle = (i - 1) * tau
             o_i = l0 * unit(angle)
-            towards = unit(angle + phi2) if coupler_angle else rotated(u2, angle)
-            c_i = a + pin_radius * towards                             # eq. (4)
-            # B_i on the same side of C_i -> O_i as B1 of A -> O1: the branch is kept.
-            b_i, cos_mu_i = circle_intersection(o_i, l3, c_i, l2p, -sign)
-            theta.append(angle_of(b_i - o_i))
+            theta_i, cos_mu_i, c_i, b_i = rocker.call(
+                [a, lead, o_i, l3, l2p, pin_radius, angle, math.cos(angle), math.sin(angle)])
+            theta.append(theta_i)
             cos_mu.append(cos_mu_i)
             joints |= {f"O{i}": o_i, f"C{i}": c_i, f"B{i}": b_i}
             links += [("A", f"C{i}"), (f"C{i}", f"B{i}"), (f"O{i}", f"B{i}")]
@@ -178,3 +177,30 @@ class FourBarConverter(Mechanism):
 def _cross(a, b):
     """The planar cross product a_x·b_y − a_y·b_x, per sample."""
     return a[0] * b[1] - a[1] * b[0]
+
+
+@lru_cache(maxsize=4)
+def _rocker(coupler_angle: bool, sign: int) -> ca.Function:
+    """Rocker i >= 2 of :meth:`FourBarConverter.chain_expressions` as an SX function of (A,
+    φ2 or AB1's direction, O_i, l3, l2', the pin radius |AC_i|, the pins' angle (i-1)τ and
+    its cosine and sine) -> (θ_i, cos μ_i, C_i, B_i): pin C_i at angle φ2 + (i-1)τ from A
+    (eq. 4), B_i where rod C_iB_i meets rocker O_iB_i. Each rocker is this function called on
+    the chain's symbols: the nodes CasADi makes are those the same arithmetic written out
+    per rocker makes (the kinematics serialise to the same text), made in one call instead
+    of a few hundred Python operations each."""
+    a = ca.SX.sym("a", 2)
+    o_i = ca.SX.sym("o_i", 2)
+    l3, l2p, pin_radius, angle, cos_a, sin_a = (
+        ca.SX.sym(name) for name in ("l3", "l2p", "pin_radius", "angle", "cos_a", "sin_a"))
+    if coupler_angle:
+        lead = ca.SX.sym("phi2")
+        towards = unit(angle + lead)
+    else:       # geometry.rotated(u2, angle), the angle's cosine and sine given
+        lead = ca.SX.sym("u2", 2)
+        towards = ca.vertcat(cos_a * lead[0] - sin_a * lead[1],
+                             sin_a * lead[0] + cos_a * lead[1])
+    c_i = a + pin_radius * towards                                     # eq. (4)
+    # B_i on the same side of C_i -> O_i as B1 of A -> O1: the branch is kept.
+    b_i, cos_mu_i = circle_intersection(o_i, l3, c_i, l2p, -sign)
+    return ca.Function("rocker", [a, lead, o_i, l3, l2p, pin_radius, angle, cos_a, sin_a],
+                       [angle_of(b_i - o_i), cos_mu_i, c_i, b_i])

@@ -166,3 +166,27 @@ def _solved(tmp_path, data) -> str:
     code, _ = run_main(["solve", path, "--out", tmp_path / "out", "--no-plots"])
     assert code == 0
     return (tmp_path / "out" / "result.json").read_text()
+
+
+def test_the_summary_says_where_each_bounded_quantity_is_read(tmp_path):
+    """The ratio's bound is read at e = 1 (its definition), a housing bound at its worst over
+    the listed eccentricities: the summary's quantities line says which, quantity by quantity
+    (it said "worst over the listed eccentricities" of both, and printed the ratio at e = 1)."""
+    import yaml
+
+    data = file_data(HOUSING_FILE)
+    data["design"]["phases"] = 4
+    data["regulation"] = {"eccentricity": [1.0, 0.5]}
+    data.setdefault("constraints", {})["ratio"] = {"upper": 0.6}
+    path = tmp_path / "capped.yaml"
+    path.write_text(yaml.safe_dump(data))
+    code, _ = run_main(["solve", path, "--out", tmp_path / "out", "--no-plots"])
+    result = json.loads((tmp_path / "out" / "result.json").read_text())
+    assert code == 0 and result["status"] == "optimal"
+    line = next(x for x in (tmp_path / "out" / "summary.txt").read_text().splitlines()
+                if x.startswith("quantities: "))
+    ratio = result["quantities"]["values"]["ratio"]
+    assert ratio == pytest.approx(result["ratio"], rel=1e-12)      # the ratio at e = 1
+    assert f"ratio = {ratio:.6g} (at e = 1)" in line
+    assert "housing_radius = " in line and \
+        "mm (worst over the listed eccentricities)" in line

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from optdesign.evaluation.sensitivity import sensitivity_line
 from optdesign.outputs.units import gear_ratio_text, input_speed_text
-from optdesign.quantities import unit_text
+from optdesign.quantities import get_quantity, unit_text
 from optdesign.quantities.criteria import (LengthConstraint, constraints_of, objective_of,
                                            quantity_specs)
 
@@ -34,7 +34,7 @@ def summary_text(result, problem) -> str:
         if named:
             lines.append("quantities: " + "; ".join(
                 f"{spec.key} = {values[spec.key]:.6g}{unit_text(spec.name)}"
-                for spec in named) + f" (worst over {over})")
+                f"{_where(spec, over)}" for spec in named))
         if result.worst_case_delta is not None:
             best = result.best_phase()
             bounded = "".join(
@@ -126,3 +126,13 @@ def bound_warnings(result, problem) -> list[str]:
                    f"optimum would go past it (d{objective_of(problem).symbol}/d bound = "
                    f"{a['sensitivity']:+.3g} per mm); check that the bound is a real limit")
     return out
+
+
+def _where(spec, over: str) -> str:
+    """Where a bounded quantity's value in the summary is read: at its own eccentricity
+    (``swing@0.5``, its key says so), at the quantity's (the ratio, at e = 1), else its worst
+    over ``over``."""
+    if spec.at is not None:
+        return ""
+    at = get_quantity(spec.name).at
+    return f" (at e = {at:g})" if at is not None else f" (worst over {over})"

@@ -142,6 +142,8 @@ def test_the_45_kinds_of_call_of_the_audit():
         (lambda: api.analyze(PAPER, {"phases": True}), "design.phases must be an integer"),
         (lambda: api.analyze(PAPER, {"phases": 0}), "design.phases must be at least 2"),
         (lambda: api.analyze(PAPER, {"phases": 100000}), "design.phases must be at most 64"),
+        (lambda: api.analyze(PAPER, {"phases": 7}),
+         "design.phases must be a count the problem admits"),
         (lambda: api.analyze(PAPER, {"l3": "x"}), "design.l3 must be a number"),
         (lambda: PAPER.with_eccentricities([-1]), "regulation.eccentricity must be positive"),
         (lambda: PAPER.with_eccentricities([2]), "fractions must lie in"),

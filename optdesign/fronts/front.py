@@ -134,6 +134,26 @@ class ParetoResult(Tabular):
         k = self.indicators.get("knee")
         return None if k is None else self.points.loc[k]
 
+    @property
+    def knee_design(self) -> dict | None:
+        """The knee's design (its lengths and count, as ``SolveResult.design`` holds one:
+        what ``analyze``, ``plot_speeds`` and ``explore`` take), or None."""
+        knee = self.knee
+        return None if knee is None else self.design_of(knee)
+
+    def design_of(self, row) -> dict:
+        """The design of one row of :attr:`points` (a pandas row, or its index label): its
+        lengths in mm and its count, by the mechanism's name."""
+        if not hasattr(row, "to_dict"):
+            row = self.points.loc[row]
+        count = row.get(self.count_name, row.get(GENERIC_COUNT))
+        return {self.count_name: int(count), **{k: float(row[k]) for k in self._lengths()}}
+
+    def _lengths(self) -> list[str]:
+        """The design's length columns (every column of the table not named by the front)."""
+        known = set(columns_of(self.count_name, (), self.criteria_columns))
+        return [c for c in self.points.columns if c not in known]
+
     def summary(self) -> str:
         ind = self.indicators
         n = ind.get("n_points", 0)
@@ -156,8 +176,7 @@ class ParetoResult(Tabular):
         ``schema_version`` and ``units``, which also give the unit of every pareto.csv
         column (the design columns in mm)."""
         df = self.points.replace({np.nan: None})
-        known = set(columns_of(self.count_name, (), self.criteria_columns))
-        lengths = [c for c in self.points.columns if c not in known]
+        lengths = self._lengths()
         # a design holds the lengths and the count (by its mechanism's name)
         counts = {k for end in self.ends for k in (end.get("design") or {})} - set(lengths)
         count_units = {k: "- (count)" for k in

@@ -472,7 +472,8 @@ class Problem:
     def checked_values(self, values: Mapping) -> dict[str, float]:
         """``values`` (design keys to numbers: a :class:`SolveResult`'s ``.design``) checked
         by the loader's rules: known keys, lengths positive finite numbers, the count a whole
-        number within the loader's limits. Raises :class:`ProblemError` naming the key."""
+        number the problem admits (as ``--design`` checks it). Raises :class:`ProblemError`
+        naming the key."""
         r = Reader(self.source)
         if not isinstance(values, Mapping):
             raise ProblemError(f"{self.source}: a design is a mapping of design keys to "
@@ -486,6 +487,12 @@ class Problem:
             out[spec.name] = float(r.integer(values[spec.name], key, int(spec.minimum),
                                              MAX_COUNT)) if spec.integer else \
                 r.number(values[spec.name], key, positive=True)
+        count = self.model.count_variable
+        if count in out and int(out[count]) not in self.counts():
+            admitted = self.counts()
+            span = f"{admitted[0]}–{admitted[-1]}" if len(admitted) > 1 else str(admitted[0])
+            raise ProblemError(f"{self.source}: design.{count} must be a count the problem "
+                               f"admits ({span}; got {int(out[count])})")
         return out
 
 

@@ -103,3 +103,26 @@ def test_the_notebook_runs_on_the_shipped_slotted_lever_front(tmp_path, monkeypa
     text = _text(outputs)
     assert "front title: pareto_slotted_forward: δ against ratio" in text
     assert "feasible: True" in text and "np." not in text
+
+
+
+def test_the_knees_design_is_what_the_plots_and_analyze_take(small_front, small_path):
+    """``front.knee`` is the knee's whole row (every column of pareto.csv), which a design
+    argument refuses; ``front.knee_design`` is its design alone, the lengths and the count
+    (the API's own example plotted the row, and raised)."""
+    import matplotlib.pyplot as plt
+
+    from optdesign import analyze, load_problem, plot_speeds
+    from optdesign.errors import ProblemError
+
+    problem, result = load_problem(small_path), small_front[0]
+    with pytest.raises(ProblemError, match="design.delta is not a known key"):
+        plot_speeds(problem, result.knee.to_dict())
+    design = result.knee_design
+    assert set(design) == set(problem.design)
+    assert design == result.design_of(result.knee.name) == result.design_of(result.knee)
+    assert design[problem.model.count_variable] == int(result.knee["phases"])
+    assert all(design[k] == result.knee[k] for k in problem.model.lengths)
+    checked = analyze(problem, design)
+    assert checked.to_frame()["delta"].max() == pytest.approx(result.knee["delta"], rel=1e-6)
+    plt.close(plot_speeds(problem, design))

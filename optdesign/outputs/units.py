@@ -88,6 +88,10 @@ UNITS: dict[str, str] = {
     "share_below_min_ratio": "- (share of the parts)",
     "share_above_max_ripple": "- (share of the parts)",
     "share_rejected": "- (share of the parts: not assembling or below the angle)",
+    "share_outside_bounds": "- (share of the parts beyond each side of a bound, by its file "
+                            "key)",
+    "share_failing_any": "- (share of the parts: not assembling, or beyond any rule the "
+                         "parts' figures give)",
     # pareto
     "epsilon": RATIO_OF_SPEEDS + ", the ratio bound of the point's solve",
     "hypervolume": "- (normalised objectives)", "spacing": "- (normalised objectives)",

@@ -19,6 +19,8 @@ from optdesign.tolerance.section import DEFAULT_K, DEFAULT_SAMPLES
 
 #: the percentiles the summary reports
 PERCENTILES = (1, 5, 50, 95, 99)
+#: the parts' column of each quantity their figures give (:func:`summary`'s bounds)
+SAMPLED = {"ratio": "ratio", "ripple": "delta", "transmission_angle": "mu_min_deg"}
 
 
 def monte_carlo(problem, lengths: Mapping[str, float] | None = None, tolerances=None,
@@ -75,7 +77,11 @@ def evaluate_offsets(problem, box, offsets: np.ndarray, nominal: dict | None = N
 
 
 def summary(frame, problem) -> dict:
-    """Percentiles, extremes and the shares of parts that fail the problem's rules."""
+    """Percentiles, extremes and the shares of parts that fail the problem's rules: each
+    rule's (not assembling, below the angle, the ratio's floor, δ's cap, each side of a
+    bound on a quantity the parts' figures give), ``share_rejected`` (not assembling or
+    below the angle), ``share_failing_any`` (any of them), and the bounds the parts'
+    figures do not give (``bounds_not_sampled``)."""
     ok = frame["assembles"].to_numpy()
     n = len(frame)
     out = {"parts": n, "share_not_assembling": float(1 - ok.mean()) if n else 0.0}
@@ -97,8 +103,44 @@ def summary(frame, problem) -> dict:
         out["min_ratio"] = c.min_ratio
         out["share_below_min_ratio"] = float((ok & (frame["ratio"].to_numpy() <
                                                     c.min_ratio)).mean())
+    fails = ~ok | below_angle
+    if c.min_ratio > 0:
+        fails |= ok & (frame["ratio"].to_numpy() < c.min_ratio)
     if c.max_ripple is not None:
         out["max_ripple"] = c.max_ripple
         out["share_above_max_ripple"] = float((ok & (frame["delta"].to_numpy() >
                                                      c.max_ripple)).mean())
+        fails |= ok & (frame["delta"].to_numpy() > c.max_ripple)
+    outside, not_sampled = _bounds_outside(frame, problem, ok)
+    for share in outside.values():
+        fails |= share
+    out["share_outside_bounds"] = {key: float(share.mean()) if n else 0.0
+                                   for key, share in outside.items()}
+    out["bounds_not_sampled"] = not_sampled
+    out["share_failing_any"] = float(fails.mean()) if n else 0.0
     return out
+
+
+def _bounds_outside(frame, problem, ok: np.ndarray) -> tuple[dict, list[str]]:
+    """({file key: whether each part lies beyond that side}, [file keys not sampled]) of
+    every side of the problem's bounds on quantities (``constraints.NAME``) that the parts'
+    figures give: the ratio at e = 1, δ and the least transmission angle (at the problem's
+    own eccentricities); the others (a housing radius, a swing, a bound at an eccentricity
+    of its own) are not in the parts' figures."""
+    from optdesign.quantities.bounds import side_key
+    from optdesign.quantities.criteria import quantity_specs
+
+    outside, not_sampled = {}, []
+    for spec in quantity_specs(problem):
+        column = SAMPLED.get(spec.name) if spec.at is None else None
+        for side in ("lower", "upper"):
+            bound = getattr(spec, side)
+            if not np.isfinite(bound):
+                continue
+            key = side_key(problem.constraints.spelled, spec, side)
+            if column is None:
+                not_sampled.append(key)
+                continue
+            v = frame[column].to_numpy()
+            outside[key] = ok & ((v < bound) if side == "lower" else (v > bound))
+    return outside, not_sampled

@@ -92,7 +92,13 @@ def format_tolerance(doc: dict) -> str:
     if "share_above_max_ripple" in mc:
         shares.append(f"δ above {mc['max_ripple']:g} "
                       f"{100 * mc['share_above_max_ripple']:.2f} %")
+    shares += [f"beyond {key} {100 * share:.2f} %"
+               for key, share in mc.get("share_outside_bounds", {}).items()]
+    shares.append(f"failing any of these {100 * mc['share_failing_any']:.2f} %")
     lines.append("parts: " + "; ".join(shares))
+    if mc.get("bounds_not_sampled"):
+        lines.append("not in the parts' figures (the worst parts' quantities above are exact): "
+                     + ", ".join(mc["bounds_not_sampled"]))
     if mc["share_not_assembling"] > 0 or mc["share_below_min_transmission_angle"] > 0:
         lines.append("some parts break the angle rule or do not assemble: `objective: {robust: "
                      "worst_case}` in the problem file sizes a design whose every part of this "

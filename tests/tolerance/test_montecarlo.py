@@ -67,3 +67,26 @@ def test_parts_that_fail_are_counted():
     assert stats["share_below_min_transmission_angle"] == pytest.approx(below.mean())
     assert stats["share_rejected"] == pytest.approx((failed | below).mean())
     assert 0 < below.mean()
+
+
+def test_a_bound_on_a_quantity_counts_among_the_parts_that_fail():
+    """A cap on the ratio (constraints.ratio.upper) is a rule the parts' figures give: its
+    share is counted, and the share failing any rule holds it with the angle's (the summary
+    gave the angle's alone as the parts rejected). A housing bound is not in the parts'
+    figures: it is named as such, not counted as kept."""
+    problem = problem_from_dict(paper(constraints={"min_transmission_angle_deg": 56,
+                                                   "ratio": {"upper": 0.35},
+                                                   "housing_radius": {"upper": 500}},
+                                      tolerances={"default": 0, "lengths": {"l0": 4,
+                                                                            "l3": 2}}))
+    frame = monte_carlo(problem, samples=400, seed=3)
+    stats = summary(frame, problem)
+    ok = frame["assembles"].to_numpy()
+    capped = ok & (frame["ratio"].to_numpy() > 0.35)
+    below = ok & (frame["mu_min_deg"].to_numpy() < 56)
+    assert stats["share_outside_bounds"] == {"constraints.ratio.upper":
+                                             pytest.approx(capped.mean())}
+    assert 0 < capped.mean() < 1 and 0 < below.mean() < 1
+    assert stats["share_failing_any"] == pytest.approx((~ok | below | capped).mean())
+    assert stats["share_failing_any"] > stats["share_rejected"]
+    assert stats["bounds_not_sampled"] == ["constraints.housing_radius.upper"]

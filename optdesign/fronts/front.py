@@ -211,12 +211,15 @@ def _plain(row: dict) -> dict:
     return out
 
 
-def evaluate(points, axis: Axis = Axis(), flat_below: float | None = None
-             ) -> tuple[dict, dict]:
+def evaluate(points, axis: Axis = Axis(), flat_below: float | None = None,
+             at_rest: float | None = None) -> tuple[dict, dict]:
     """Indicators of the overall front (knee as a row label of ``points``) and per count;
-    a front whose δ spans less than ``flat_below`` is flat, its knee the largest-gain end."""
+    a front whose δ spans less than ``flat_below`` is flat, its knee the largest-gain end;
+    a design of δ ``at_rest`` (its output at rest once a turn) is not the knee where
+    another can be (:func:`~optdesign.fronts.indicators.indicators`)."""
     ok = points[points["status"].isin(VERIFIED)]
-    named = {"name": axis.name, "sign": axis.sign, "flat_below": flat_below}
+    named = {"name": axis.name, "sign": axis.sign, "flat_below": flat_below,
+             "at_rest": at_rest}
     overall = indicators(ok["delta"], gain(ok, axis), **named)
     if overall["knee"] is not None:
         overall["knee"] = int(ok.index[overall["knee"]])

@@ -114,7 +114,8 @@ def value_knee(front: np.ndarray, sign: float = 1.0) -> int | None:
 
 
 def indicators(delta, ratio, ideal=None, nadir=None, name: str = "ratio",
-               sign: float = 1.0, flat_below: float | None = None) -> dict:
+               sign: float = 1.0, flat_below: float | None = None,
+               at_rest: float | None = None) -> dict:
     """Hypervolume, spacing and knee of the non-dominated subset of (δ, ratio) points; a
     front of one design has neither hypervolume nor spacing (None), not the ideal's value.
     ``ratio`` may be any gain (larger better) of the quantity ``name``, gain = sign·value:
@@ -124,7 +125,13 @@ def indicators(delta, ratio, ideal=None, nadir=None, name: str = "ratio",
     ``"per_ripple"``), else the chord's in the normalised front (``"chord"``). A front whose δ
     spans less than ``flat_below`` (the δ resolution a designer reads) is *flat*: δ is the
     same to them over the whole front, so the knee is the end of the largest gain (``flat``
-    true, ``knee_rule`` ``"flat"``)."""
+    true, ``knee_rule`` ``"flat"``).
+
+    ``at_rest``: the δ of a design whose output comes to rest once a turn (the midrange δ
+    2(ω_max − ω_min)/(ω_max + ω_min) is 2 where ω_min = 0), the largest any design has. Such
+    a design is never the knee, where the front holds another: past where δ stops growing
+    the ratio per unit of ripple grows without limit, and the per-ripple rule would pick the
+    design that stalls (``knee_at_rest_excluded`` counts the designs left out)."""
     f = objectives(delta, ratio)
     mask = non_dominated(f) if len(f) else np.zeros(0, bool)
     front = f[mask]
@@ -134,15 +141,22 @@ def indicators(delta, ratio, ideal=None, nadir=None, name: str = "ratio",
     flat = flat_below is not None and len(front) > 1 and \
         float(np.ptp(front[:, 0])) < flat_below
     z, ideal, nadir = normalise(front, ideal, nadir)
-    by_value = None if flat else value_knee(front, sign)
+    # the knee's candidates: the front's designs that do not come to rest, where it has any
+    moving = np.ones(len(front), bool) if at_rest is None else \
+        front[:, 0] < at_rest * (1 - 1e-9)
+    if not moving.any():
+        moving[:] = True
+    among = np.flatnonzero(moving)
+    by_value = None if flat else value_knee(front[among], sign)
     if flat:
-        k, rule = int(np.argmin(front[:, 1])), "flat"
+        k, rule = int(among[np.argmin(front[among, 1])]), "flat"
     elif by_value is not None:
-        k, rule = by_value, "per_ripple"
+        k, rule = int(among[by_value]), "per_ripple"
     else:
-        k, rule = knee(z), "chord"
+        k, rule = int(among[knee(z[among])]), "chord"
     single = len(front) == 1        # no trade-off: the normalisation has nothing to span
     return {"n_points": int(len(front)), "flat": bool(flat), "knee_rule": rule,
+            "knee_at_rest_excluded": int(len(front) - len(among)),
             "hypervolume": None if single else hypervolume_2d(z),
             "spacing": None if single else spacing(z),
             "knee": int(np.flatnonzero(mask)[k]),

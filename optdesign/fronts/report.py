@@ -348,6 +348,12 @@ def knee_reason(result) -> str:
         text += (f"the knee is the design farthest from the chord between its two ends, on "
                  f"both spans scaled to one (a {x} or a δ that is not positive has no per "
                  f"cent to trade).")
+    resting = ind.get("knee_at_rest_excluded", 0)
+    if resting:
+        text += (f" {resting} design{'s' if resting > 1 else ''} of the front, "
+                 f"{'whose output comes' if resting > 1 else 'its output coming'} to rest once "
+                 f"a turn (δ = 2, the largest ripple there is), "
+                 f"{'are' if resting > 1 else 'is'} not taken as the knee.")
     if knee is not None and end.name != knee.name and knee["delta"] > 0 and knee[x] != 0:
         more = abs(end[x] - knee[x]) / abs(knee[x])
         cost = (end["delta"] - knee["delta"]) / knee["delta"]

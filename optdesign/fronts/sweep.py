@@ -482,7 +482,9 @@ def _rebuild(problem, done: dict, out: Path, settings: dict,
     records = refine.visible(list(done.values()), list(problem.model.lengths))
     model, columns = problem.model, result_columns(problem)
     points = frame(records, list(model.lengths), axis, model.count_variable, list(columns))
-    overall, per_count = evaluate(points, axis, section.refine.delta_resolution)
+    # the midrange δ of an output at rest once a turn (ω_min = 0): 2, the largest there is
+    at_rest = 2.0 if problem.objective.ripple == "midrange" else None
+    overall, per_count = evaluate(points, axis, section.refine.delta_resolution, at_rest)
     ends = [r for r in records if isinstance(r["key"][1], str)]
     result = ParetoResult(points, overall, per_count, run=dict(settings), ends=ends,
                           count_name=model.count_variable, criteria_columns=columns)

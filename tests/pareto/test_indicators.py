@@ -109,3 +109,18 @@ def test_the_knee_on_the_values_own_scales_is_the_most_gain_per_ripple():
     # radius·δ: 38.0, 32.5, 34.2, 45.5, 55.2
     assert value_knee(objectives(rip, -radius), sign=-1.0) == 1
     assert value_knee(objectives(delta, ratio - 0.6)) is None      # a ratio below zero
+
+
+def test_a_design_whose_output_comes_to_rest_is_not_the_knee():
+    """A slotted lever's front runs up to δ = 2 (ω_min = 0, the output at rest once a turn):
+    past where δ stops growing the ratio per unit of ripple grows without limit, and the
+    per-ripple rule took that design, the worst ripple there is. It is left out (counted);
+    a front of such designs alone keeps its knee."""
+    ratio = np.array([0.1, 0.5, 1.0, 1.5, 1.94, 2.44])
+    delta = np.array([0.4, 0.9, 1.4, 1.8, 1.96, 2.0])
+    assert indicators(delta, ratio)["knee"] == 5                  # the rule, unguarded
+    guarded = indicators(delta, ratio, at_rest=2.0)
+    assert guarded["knee"] == 4 and guarded["knee_rule"] == "per_ripple"
+    assert guarded["knee_at_rest_excluded"] == 1
+    assert indicators(np.array([2.0, 2.0]), np.array([1.0, 2.0]), at_rest=2.0)["knee"] == 1
+    assert indicators(delta, ratio)["knee_at_rest_excluded"] == 0

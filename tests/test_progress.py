@@ -142,3 +142,35 @@ def test_simulate_reports_each_turn_to_its_progress_callback():
     result = simulate(load_problem(ROOT / "problems" / "sharkov2022_dynamics.yaml"),
                       progress=lambda: turns.append(1))
     assert len(turns) == result.cycles >= 1
+
+
+# --------------------------------------------------------------------------- solve
+class _Bar:
+    def __init__(self):
+        self.n = 0
+
+    def update(self):
+        self.n += 1
+
+
+class _Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def test_a_long_solve_says_each_count_off_a_terminal_and_a_short_one_nothing():
+    """Off a terminal the bar is silent: a solve that has run long enough writes a line per
+    count it finishes (a wide range of counts took minutes with nothing in its log); a short
+    solve, and any solve on a terminal (the bar), writes none."""
+    from optdesign.outputs.progress_lines import CountLines
+
+    log, bar = io.StringIO(), _Bar()
+    tick = CountLines(bar, 3, stream=log, after_s=0.0)
+    tick(), tick()
+    lines = log.getvalue().splitlines()
+    assert bar.n == 2 and len(lines) == 2
+    assert lines[0].startswith("solve ") and lines[1].endswith(": 2 of 3 phase counts")
+    quiet, terminal = io.StringIO(), _Terminal()
+    CountLines(_Bar(), 3, stream=quiet)()                   # not yet AFTER_S into the work
+    CountLines(_Bar(), 3, stream=terminal, after_s=0.0)()
+    assert quiet.getvalue() == "" and terminal.getvalue() == ""

@@ -46,6 +46,7 @@ def run(args) -> int:
 
             from optdesign.lifetime import exit_on_sigterm, raise_if_terminated
             from optdesign.outputs.folder import OutputFolder
+            from optdesign.outputs.progress_lines import CountLines
             from optdesign.solver import solve
         # one run at a time in ``out``; its set replaces the previous one whole
         # (docs/contract.md)
@@ -53,7 +54,7 @@ def run(args) -> int:
             with phase("solving"), tqdm(total=len(problem.counts()), desc="phase counts",
                                         unit="count", file=sys.stderr, disable=None,
                                         leave=False) as bar:
-                result = solve(problem, progress=bar.update)
+                result = solve(problem, progress=CountLines(bar, len(problem.counts())))
             raise_if_terminated()                     # nothing published after a SIGTERM
             if result.status != "optimal" and _holds_optimum(out):
                 return _kept(result, problem, out, args)

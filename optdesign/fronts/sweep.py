@@ -35,6 +35,7 @@ from optdesign.fronts.section import DEFAULT_POINTS, ParetoSection
 from optdesign.fronts.store import Journal, to_solve_again
 from optdesign.lifetime import die_with_parent, raise_if_terminated, signals_held
 from optdesign.limits import local_processes
+from optdesign.outputs.progress_lines import is_terminal
 from optdesign.quantities.criteria import result_columns
 from optdesign.solver import verify
 
@@ -145,13 +146,6 @@ class _Dask:
             self.client.close()
 
 
-def _is_terminal(stream) -> bool:
-    try:
-        return stream.isatty()
-    except (AttributeError, ValueError):
-        return False
-
-
 def _executor(workers: int | None, scheduler):
     if scheduler is not None:
         return _Dask(scheduler)
@@ -242,7 +236,7 @@ class _Sweep:
                         desc="ends and uniform pass", unit="point", file=sys.stderr,
                         disable=None if progress else True, dynamic_ncols=True)
         #: off a terminal the bar is silent: one line a round says where the sweep is
-        self.pipe = progress and not _is_terminal(sys.stderr)
+        self.pipe = progress and not is_terminal(sys.stderr)
         self.say(f"the ends and the uniform pass: {self.bar.total - self.n_resumed} points "
                  f"planned ({len(self.counts)} phase count(s) × {self.n_points} ε values and "
                  f"2 ends)" + (f", {self.n_resumed} resumed" if self.n_resumed else ""))

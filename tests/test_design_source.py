@@ -92,6 +92,11 @@ def test_a_point_of_a_front_or_its_knee(solved, tmp_path):
 @pytest.mark.parametrize("argv,message", [
     (["--point", "1"], "--point picks a point of a front: give the front with --design"),
     (["--design", "{front}", "--point", "1"], "--point 1: that point of"),
+    (["--design", "{local}", "--point", "1"], "is not an optimal design of the front (status "
+                                              "'local': verified, but a design of its count "
+                                              "beats it on its own ε-problem)"),
+    (["--design", "{four}", "--point", "1"], "design.phases must be a whole number the "
+                                             "problem admits (6; got 4)"),
     (["--design", "{front}", "--point", "4"], "--point must lie in [1, 3]"),
     (["--design", "{front}"], "a front holds many designs: pick one with --point K or --knee"),
     (["--design", "{front}", "--point", "2", "--knee"], "--point and --knee each pick a point"),
@@ -119,6 +124,13 @@ def test_a_design_that_cannot_be_taken_is_one_line_and_exit_2(solved, tmp_path, 
                                 "2,0.001,0.99,20,100,50,optimal,2\n")
     files["part"].write_text("phases,delta,ratio,l0,l1,l2,l2_prime,status\n"
                              "6,0.3,0.5,225,20,225,100,optimal\n")
+    row = "225,20,225,100,56"
+    files["local"] = tmp_path / "local.csv"
+    files["local"].write_text(f"phases,delta,ratio,l0,l1,l2,l2_prime,l3,status\n"
+                              f"6,0.3,0.5,{row},local\n")
+    files["four"] = tmp_path / "four.csv"
+    files["four"].write_text(f"phases,delta,ratio,l0,l1,l2,l2_prime,l3,status\n"
+                             f"4,0.3,0.5,{row},optimal\n")
     files["short"].write_text(json.dumps({"status": "optimal",
                                           "design": {"l3": 56, "phases": 6}}))
     argv = [a.format(**files) for a in argv]

@@ -190,3 +190,10 @@ def test_the_summary_says_where_each_bounded_quantity_is_read(tmp_path):
     assert f"ratio = {ratio:.6g} (at e = 1)" in line
     assert "housing_radius = " in line and \
         "mm (worst over the listed eccentricities)" in line
+    binding = next(x for x in (tmp_path / "out" / "summary.txt").read_text().splitlines()
+                   if x.startswith("binding: "))
+    assert ".attained" not in binding            # the NLP's row names are not the file's
+    names = {a["name"] for a in result["active"]}      # result.json keeps the rows' names
+    assert {"ratio.attained", "housing_radius"} <= names
+    assert "constraints.ratio.upper (d" in binding and \
+        "constraints.housing_radius.upper (d" in binding

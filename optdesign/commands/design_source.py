@@ -219,8 +219,10 @@ def _from_front(path: Path, problem, where: str, point: int | None) -> tuple[dic
     row = rows[point - 1]
     if not isinstance(row, dict) or row.get("status") != "optimal":
         status = row.get("status") if isinstance(row, dict) else None
-        raise UsageError(f"--point {point}: that point of {shown(str(path))} is not a verified "
-                         f"design (status {shown(status)})")
+        why = (": verified, but a design of its count beats it on its own ε-problem"
+               if status == "local" else "")
+        raise UsageError(f"--point {point}: that point of {shown(str(path))} is not an "
+                         f"optimal design of the front (status {shown(status)}{why})")
     return _design_of(row, problem), (f"point {point} of the front {path} (δ = "
                                       f"{_number(row.get('delta'))}, ratio = "
                                       f"{_number(row.get('ratio'))})")
@@ -320,7 +322,7 @@ def _checked(design: dict, problem, where: str) -> dict:
             span = f"{admissible[0]}–{admissible[-1]}" if len(admissible) > 1 else \
                 str(admissible[0])
             raise UsageError(f"{where}: design.{count} must be a whole number the problem "
-                             f"admits ({span}; got {shown(design[count])})")
+                             f"admits ({span}; got {values[count]:g})")
         values[count] = int(values[count])
     return values
 

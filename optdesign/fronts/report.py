@@ -332,8 +332,9 @@ def knee_reason(result) -> str:
     knee, end = result.knee, result.front.iloc[-1 if axis.sign > 0 else 0]
     if ind.get("knee_rule") == "per_ripple":
         per = "more" if axis.sign > 0 else "less"
-        text += (f"the knee is the design of the most {x} per unit of ripple ({x}"
-                 f"{'/' if axis.sign > 0 else '·'}δ {'largest' if axis.sign > 0 else 'least'})")
+        text += (f"the knee is the design of the most {x} per unit of ripple ({x}/δ largest)"
+                 if axis.sign > 0 else
+                 f"the knee is the design of the least {x} for its ripple ({x}·δ least)")
         start = result.front.iloc[0 if axis.sign > 0 else -1]
         if knee is not None and knee.name == end.name:
             text += (f", the {best}-{x} end: all along the front each per cent {per} {x} costs "

@@ -4,8 +4,9 @@ from __future__ import annotations
 from optdesign.evaluation.sensitivity import sensitivity_line
 from optdesign.outputs.units import gear_ratio_text, input_speed_text
 from optdesign.quantities import get_quantity, unit_text
-from optdesign.quantities.criteria import (LengthConstraint, constraints_of, objective_of,
-                                           quantity_specs)
+from optdesign.quantities.bounds import side_key
+from optdesign.quantities.criteria import (ATTAINED, LengthConstraint, constraints_of,
+                                           objective_of, quantity_specs)
 
 
 def summary_text(result, problem) -> str:
@@ -96,8 +97,21 @@ def binding_text(active: list[dict], problem) -> str:
         return "binding: nothing (an interior optimum: no bound or constraint is active)"
     what = objective_of(problem).symbol
     return "binding: " + "; ".join(
-        f"{a['name']} (d{what}/d bound = {a['sensitivity']:+.3g}"
+        f"{_bound_name(a['name'], problem)} (d{what}/d bound = {a['sensitivity']:+.3g}"
         f"{'' if a['unit'] == '-' else ' per ' + a['unit']})" for a in active)
+
+
+def _bound_name(name: str, problem) -> str:
+    """A binding row's name as the designer wrote it: a bound on a quantity by its file key
+    (``constraints.ratio.upper``: the NLP's row ``ratio.attained`` holds a cap on the ratio),
+    every other row by its own name."""
+    base = name[:-len(ATTAINED)] if name.endswith(ATTAINED) else name
+    spec = next((s for s in quantity_specs(problem) if s.key == base), None)
+    if spec is None:
+        return name
+    natural = get_quantity(spec.name).natural_side()
+    side = natural if base == name else ("lower" if natural == "upper" else "upper")
+    return side_key(problem.constraints.spelled, spec, side)
 
 
 def bound_warnings(result, problem) -> list[str]:

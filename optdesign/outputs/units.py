@@ -97,7 +97,8 @@ UNITS: dict[str, str] = {
     "hypervolume": "- (normalised objectives)", "spacing": "- (normalised objectives)",
     "reference_point_normalised": "- (normalised objectives)",
     "knee": "- (row index)", "index": "- (row index)", "key": "- (phase count, point index)",
-    "n_points": COUNT, "points": COUNT, "counts": "- (phase counts)", "tries": COUNT,
+    "n_points": COUNT, "knee_at_rest_excluded": COUNT,
+    "points": COUNT, "counts": "- (phase counts)", "tries": COUNT,
     "resumed_points": COUNT, "workers": COUNT,
     "round": "- (refinement round; 0: the uniform pass, 5 and later: the hypervolume "
              "rounds)", "merged": COUNT,

@@ -317,12 +317,9 @@ def _checked(design: dict, problem, where: str) -> dict:
     if count not in values and len(problem.counts()) > 1:
         raise UsageError(f"{where}: design.{count} is missing")
     if count in values:
-        admissible = problem.counts()
-        if values[count] != int(values[count]) or int(values[count]) not in admissible:
-            span = f"{admissible[0]}–{admissible[-1]}" if len(admissible) > 1 else \
-                str(admissible[0])
+        if values[count] != int(values[count]) or int(values[count]) not in problem.counts():
             raise UsageError(f"{where}: design.{count} must be a whole number the problem "
-                             f"admits ({span}; got {values[count]:g})")
+                             f"admits ({problem.counts_text()}; got {values[count]:g})")
         values[count] = int(values[count])
     return values
 

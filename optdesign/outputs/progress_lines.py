@@ -23,12 +23,11 @@ def is_terminal(stream) -> bool:
 
 
 class CountLines:
-    """``bar.update`` for each count finished, and off a terminal a line on ``stream`` per
+    """A solve's progress: ``bar.update`` for each count finished, and off a terminal a line on ``stream`` per
     count once the work has run :data:`AFTER_S`."""
 
-    def __init__(self, bar, total: int, what: str = "phase counts", command: str = "solve",
-                 stream=None, after_s: float = AFTER_S):
-        self.bar, self.total, self.what, self.command = bar, total, what, command
+    def __init__(self, bar, total: int, stream=None, after_s: float = AFTER_S):
+        self.bar, self.total = bar, total
         self.stream = sys.stderr if stream is None else stream
         self.lines = not is_terminal(self.stream)
         self.after_s, self.t0, self.done = after_s, time.perf_counter(), 0
@@ -38,5 +37,5 @@ class CountLines:
         self.bar.update()
         elapsed = time.perf_counter() - self.t0
         if self.lines and elapsed >= self.after_s:
-            print(f"{self.command} {elapsed:7.1f} s: {self.done} of {self.total} "
-                  f"{self.what}", file=self.stream, flush=True)
+            print(f"solve {elapsed:7.1f} s: {self.done} of {self.total} phase counts",
+                  file=self.stream, flush=True)

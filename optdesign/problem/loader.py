@@ -389,6 +389,11 @@ class Problem:
     def counts(self) -> list[int]:
         return self.count_variable.admissible()
 
+    def counts_text(self) -> str:
+        """The admissible counts as a message names them: ``6``, or ``2–12``."""
+        admitted = self.counts()
+        return f"{admitted[0]}–{admitted[-1]}" if len(admitted) > 1 else str(admitted[0])
+
     def free_lengths(self) -> list[str]:
         return [k for k in self.model.lengths if self.design[k].is_free]
 
@@ -489,10 +494,8 @@ class Problem:
                 r.number(values[spec.name], key, positive=True)
         count = self.model.count_variable
         if count in out and int(out[count]) not in self.counts():
-            admitted = self.counts()
-            span = f"{admitted[0]}–{admitted[-1]}" if len(admitted) > 1 else str(admitted[0])
             raise ProblemError(f"{self.source}: design.{count} must be a count the problem "
-                               f"admits ({span}; got {int(out[count])})")
+                               f"admits ({self.counts_text()}; got {int(out[count])})")
         return out
 
 

@@ -12,6 +12,8 @@ from typing import Mapping
 
 import numpy as np
 
+from optdesign.quantities.bounds import side_key
+from optdesign.quantities.criteria import quantity_specs
 from optdesign.tolerance.exact_part import exact_part
 from optdesign.tolerance.parts import box_of, draw_offsets
 from optdesign.tolerance.sampled import calibrated, grid_size, sampled_parts
@@ -99,18 +101,17 @@ def summary(frame, problem) -> dict:
     out["min_transmission_angle_deg"] = c.min_transmission_angle_deg
     out["share_below_min_transmission_angle"] = float(below_angle.mean()) if n else 0.0
     out["share_rejected"] = float((~ok | below_angle).mean()) if n else 0.0
-    if c.min_ratio > 0:
-        out["min_ratio"] = c.min_ratio
-        out["share_below_min_ratio"] = float((ok & (frame["ratio"].to_numpy() <
-                                                    c.min_ratio)).mean())
     fails = ~ok | below_angle
     if c.min_ratio > 0:
-        fails |= ok & (frame["ratio"].to_numpy() < c.min_ratio)
+        below_ratio = ok & (frame["ratio"].to_numpy() < c.min_ratio)
+        out["min_ratio"] = c.min_ratio
+        out["share_below_min_ratio"] = float(below_ratio.mean())
+        fails |= below_ratio
     if c.max_ripple is not None:
+        above_ripple = ok & (frame["delta"].to_numpy() > c.max_ripple)
         out["max_ripple"] = c.max_ripple
-        out["share_above_max_ripple"] = float((ok & (frame["delta"].to_numpy() >
-                                                     c.max_ripple)).mean())
-        fails |= ok & (frame["delta"].to_numpy() > c.max_ripple)
+        out["share_above_max_ripple"] = float(above_ripple.mean())
+        fails |= above_ripple
     outside, not_sampled = _bounds_outside(frame, problem, ok)
     for share in outside.values():
         fails |= share
@@ -127,9 +128,6 @@ def _bounds_outside(frame, problem, ok: np.ndarray) -> tuple[dict, list[str]]:
     figures give: the ratio at e = 1, δ and the least transmission angle (at the problem's
     own eccentricities); the others (a housing radius, a swing, a bound at an eccentricity
     of its own) are not in the parts' figures."""
-    from optdesign.quantities.bounds import side_key
-    from optdesign.quantities.criteria import quantity_specs
-
     outside, not_sampled = {}, []
     for spec in quantity_specs(problem):
         column = SAMPLED.get(spec.name) if spec.at is None else None

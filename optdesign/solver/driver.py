@@ -100,7 +100,7 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
         # the bound most of the sample misses first
         missed = sorted(screening.missed, key=lambda n: -screening.missed[n])
         reach = _reach(problem, count, missed[0] if missed else None, workers, [given],
-                       basins.timings)
+                       result, basins.timings)
         if reach is not None and reach.out_of_reach:
             result.timings = solver.timings.to_dict()
             return _infeasible(result, problem, count, reach)
@@ -112,7 +112,7 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
     work.lines()
     if work.best is None and relax and reach is None:
         reach = _reach(problem, count, _binding_of(result), workers,
-                       [given] + [o.values for o in work.outcomes], basins.timings)
+                       [given] + [o.values for o in work.outcomes], result, basins.timings)
         if reach is not None and reach.out_of_reach:
             result.timings = solver.timings.to_dict()
             return _infeasible(result, problem, count, reach)
@@ -182,10 +182,29 @@ def _user_gave(problem) -> bool:
     return not free or any(v.initial is not None for v in free)
 
 
-def _reach(problem, count: int, binding, workers: int, known, timings: Timings):
-    """:func:`~optdesign.solver.reachable.reach_of` the count, its time the screening's."""
-    with timings.stage("screening"):
-        return reach_of(problem, count, binding, solve_phase, workers, known)
+def _reach(problem, count: int, binding, workers: int, known, result: PhaseResult,
+           timings: Timings):
+    """:func:`~optdesign.solver.reachable.reach_of` the count. Its relaxed solves are this
+    count's work: their IPOPT iterations are counted in ``result`` and their stages' seconds
+    added to ``timings`` stage by stage; the rest of the search's wall time (the exact checks
+    of the designs it weighs) is verification."""
+    solved: list[PhaseResult] = []
+
+    def counted(*args, **kwargs) -> PhaseResult:
+        solved.append(solve_phase(*args, **kwargs))
+        return solved[-1]
+
+    t0 = time.perf_counter()
+    try:
+        return reach_of(problem, count, binding, counted, workers, known)
+    finally:
+        spent = Timings()
+        for relaxed in solved:
+            spent.add(Timings(**relaxed.timings) if relaxed.timings else Timings())
+            result.iterations += relaxed.iterations
+        rest = time.perf_counter() - t0 - (spent.total() - spent.beside)
+        spent.verification += max(rest, 0.0)
+        timings.add(spent)
 
 
 def _binding_of(result: PhaseResult) -> str | None:

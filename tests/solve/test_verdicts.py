@@ -75,6 +75,12 @@ def test_a_per_cent_ratio_is_infeasible_with_the_key_and_the_reachable_ratio():
         0.728894, abs=1e-5)
     assert "objective.min_ratio at least 34.4 is out of reach: the largest ratio any design " \
            "in the bounds reaches with 6 phases is 0.728894 (verified)" in result.message
+    # the verdict's relaxed solve is the count's work: its IPOPT iterations and its stages'
+    # times are the result's (they read 0 iterations and all screening before)
+    phase, stages = result.per_phase[0], result.timings_s
+    assert result.iterations == phase.iterations > 0
+    assert stages["ipopt"] > 0 and stages["verification"] > 0
+    assert sum(stages.values()) - 2 * stages["beside"] <= result.solve_time_s
 
 
 def test_a_cap_given_as_a_quantity_bound_is_named_so():

@@ -36,6 +36,7 @@ import logging
 import os
 import shutil
 import signal
+import stat
 import subprocess
 import sys
 import tempfile
@@ -175,11 +176,19 @@ def _lock(where: Path, name: str) -> bool:
 def building(where: Path, name: str) -> bool:
     """Whether a build of ``name`` is under way: its lock names a process that runs (or
     none yet, the build being started) and is younger than :data:`LOCK_STALE_S`."""
-    lock = where / f"{name}.lock"
     try:
-        if time.time() - os.lstat(lock).st_mtime >= LOCK_STALE_S:
+        if time.time() - os.lstat(where / f"{name}.lock").st_mtime >= LOCK_STALE_S:
             return False
-        text = lock.read_text().strip()
+    except OSError:
+        return False
+    return _lock_held(where, name)
+
+
+def _lock_held(where: Path, name: str) -> bool:
+    """Whether the lock of ``name`` is there and names a process that runs (or none yet,
+    the build being started), however old it is."""
+    try:
+        text = (where / f"{name}.lock").read_text().strip()
     except OSError:
         return False
     if not text.isdigit():
@@ -191,6 +200,58 @@ def building(where: Path, name: str) -> bool:
     except OSError:                 # a process of another user's: it runs
         pass
     return True
+
+
+def swept(where: Path) -> list[str]:
+    """Remove what builds that died (killed, their machine stopped) left in ``where``: a
+    build's working folder ``.NAME.*`` (its generated C, up to :data:`MAX_CODE_BYTES`) and
+    its serialised function ``.NAME.casadi.*.tmp``, for every NAME of a library whose lock
+    is gone or names a process that has ended (a build under way holds its lock from before
+    it writes either until after it removed both). Only this user's own folders and files of
+    those two patterns are removed, a folder without following a link; the names removed
+    are returned."""
+    try:
+        entries = [e for e in os.scandir(where) if e.name.startswith(".")]
+    except OSError:
+        return []
+    removed, alive = [], {}
+    for entry in entries:
+        name = _left_by(entry.name)
+        if name is None:
+            continue
+        if name not in alive:
+            alive[name] = _lock_held(where, name)
+        if alive[name]:
+            continue
+        try:
+            st = entry.stat(follow_symlinks=False)
+            if st.st_uid != os.getuid():
+                continue
+            if stat.S_ISDIR(st.st_mode) and not entry.name.endswith(".tmp"):
+                shutil.rmtree(entry.path)
+            elif stat.S_ISREG(st.st_mode) and entry.name.endswith(".tmp"):
+                os.unlink(entry.path)
+            else:
+                continue
+        except OSError:
+            continue
+        removed.append(entry.name)
+    if removed:
+        log.debug("removed what %d builds that died left in %s", len(removed), where)
+    return removed
+
+
+def _left_by(entry: str) -> str | None:
+    """The library's name (``nlp-DIGEST40``) whose build leaves an entry of this name (a
+    working folder ``.NAME.XXXXXXXX``, a serialised function ``.NAME.casadi.XXXXXXXX.tmp``),
+    else None."""
+    head, _, rest = entry[1:].partition(".")
+    for prefix in PREFIXES.values():
+        digest = head[len(prefix) + 1:]
+        if head.startswith(f"{prefix}-") and len(digest) == 40 and \
+                all(c in "0123456789abcdef" for c in digest) and rest:
+            return head
+    return None
 
 
 def builds_under_way(where: Path, kind: str | None = None) -> int:
@@ -235,6 +296,7 @@ def start(rec: Recipe, where: Path, detached: bool = True,
         log.debug("a build is under way in %s: %s is built by a later run or `optdesign "
                   "warm-up`", where, where / f"{rec.name}.so")
         return None
+    swept(where)                        # what builds that died left, this one's included
     if not _lock(where, rec.name):
         return None
     lock, source = where / f"{rec.name}.lock", None

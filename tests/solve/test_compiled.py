@@ -294,3 +294,42 @@ def test_a_compiler_past_its_cpu_seconds_is_ended(tmp_path, monkeypatch):
     assert time.monotonic() - t0 < 60
     assert "CPU seconds" in (where / f"{rec.name}.failed").read_text()
     assert nlp_files(where) == [f"{rec.name}.failed"]
+
+
+def test_what_a_build_that_died_left_is_removed_when_the_next_build_starts(tmp_path,
+                                                                            monkeypatch):
+    """A build killed on its way (a machine stopped, a kill) leaves its working folder (the
+    generated C, up to MAX_CODE_BYTES) and its serialised function: the next
+    build removes both, and nothing of a build under way, nothing a link names, nothing of
+    another pattern."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    monkeypatch.setattr(c_library, "COMPILER", "false")         # a build that ends at once
+    where = compiled.folder()
+    dead, live = "nlp-" + "a" * 40, "native-lanes-" + "b" * 40
+    (where / f"{dead}.lock").write_text("999999999")             # its process has ended
+    (where / f"{live}.lock").write_text(str(os.getpid()))        # a build under way
+    for name in (dead, live):
+        (where / f".{name}.k3j_x9a1").mkdir()
+        (where / f".{name}.k3j_x9a1" / "nlp_deps.c").write_text("int x;")
+        (where / f".{name}.casadi.q8z2mm1t.tmp").write_text("serialised")
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    (outside / "keep.c").write_text("kept")
+    (where / f".{dead}.linked77").symlink_to(outside)            # a link: not followed
+    (where / ".notes.tmp").write_text("another pattern")
+    (where / f"{dead}.so").write_text("a library")
+    removed = c_library.swept(where)
+    assert sorted(removed) == [f".{dead}.casadi.q8z2mm1t.tmp", f".{dead}.k3j_x9a1"]
+    assert (outside / "keep.c").read_text() == "kept"
+    assert (where / f".{dead}.linked77").is_symlink()
+    assert (where / f".{live}.k3j_x9a1" / "nlp_deps.c").exists()
+    assert (where / f".{live}.casadi.q8z2mm1t.tmp").exists()
+    assert (where / ".notes.tmp").exists() and (where / f"{dead}.so").exists()
+    # a build that starts sweeps first (its own name's leftovers too)
+    (where / f".{dead}.k3j_x9a1").mkdir()
+    rec = recipe_of(problem_from_dict(vergov_data()))
+    (where / f".{rec.name}.zz81_q2w").mkdir()
+    child = compiled.start(rec, where, detached=False)
+    child.communicate()
+    assert not (where / f".{dead}.k3j_x9a1").exists()
+    assert not (where / f".{rec.name}.zz81_q2w").exists()

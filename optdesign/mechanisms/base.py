@@ -227,11 +227,11 @@ class Mechanism(ABC):
     @lru_cache(maxsize=64)
     def has_transmission_angle(self, count: int, options: tuple[tuple[str, str], ...]) -> bool:
         """False for a mechanism whose cos μ does not move with the crank (no rod-rocker
-        pair, e.g. a slotted lever): its transmission angle needs no tracking."""
-        full = self.kinematics(count, options)
-        phi = ca.SX.sym("phi")
-        cos_mu = full.call([phi, ca.SX.sym("p", len(self.lengths))], True, False)[3]
-        return bool(ca.depends_on(cos_mu, phi))
+        pair, e.g. a slotted lever): its transmission angle needs no tracking. Read off the
+        model :meth:`kinematics` is made from (a copy of its graph would cost a fifth of
+        building it)."""
+        phi, _, _, model = self.symbolic(count, options)
+        return bool(ca.depends_on(ca.vertcat(*model["cos_mu"]), phi))
 
     @lru_cache(maxsize=256)
     def mapped(self, count: int, options: tuple[tuple[str, str], ...], n_points: int):

@@ -21,8 +21,8 @@ from optdesign.evaluation.sensitivity import sensitivity_record
 from optdesign.numerics import lanes
 from optdesign.quantities import design_quantities, unit_text
 from optdesign.quantities.bounds import side_key
-from optdesign.quantities.criteria import (LengthConstraint, constraints_of, objective_of,
-                                           quantity_specs, searched_quantities)
+from optdesign.quantities.criteria import (LeastRipple, LengthConstraint, constraints_of,
+                                           objective_of, quantity_specs, searched_quantities)
 from optdesign.solver import count_order
 from optdesign.solver.accuracy import solve_accuracy
 from optdesign.solver.nlp import is_robust
@@ -31,7 +31,7 @@ from optdesign.solver.polishing import Polishing
 from optdesign.solver.reachable import reach_of
 from optdesign.solver.refine import refine
 from optdesign.solver.result import PhaseResult, SolveResult
-from optdesign.solver.screening import Scored, screen
+from optdesign.solver.screening import FLOOR_MARGIN, Scored, ripple_floor, screen
 from optdesign.solver.verify import verify
 
 #: screened designs checked exactly when no polish converges (best ranked first)
@@ -122,7 +122,8 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
     if not robust and _user_gave(problem):
         if work.best is None:           # no polish got there: polish from the user's design
             work.polish(given)
-        work.consider(basins.as_it_is(given))
+        if not _beaten(problem, count, given, work.best):
+            work.consider(basins.as_it_is(given))
     if not robust:
         _screened_floor(work, screening, basins)
     result.screening |= {"polished": work.polished, "distinct_optima": len(work.optima)}
@@ -173,6 +174,17 @@ def _screened_floor(work: "Polishing", screening, solver: PhaseSolver) -> None:
         if better is not None:
             work.consider(solver.as_it_is(better, note="refined on the exact check from "
                                                        "the best known design"))
+
+
+def _beaten(problem, count: int, values: dict, best: Outcome | None) -> bool:
+    """Whether ``best``, verified, beats the design ``values`` whatever its exact check would
+    say: the objective is the least worst δ and the design's sampled floor of δ
+    (:func:`~optdesign.solver.screening.ripple_floor`) lies above the optimum's δ. Its check
+    is then not made (it could not win: :meth:`Polishing.consider` would pass it over)."""
+    if best is None or not isinstance(objective_of(problem), LeastRipple):
+        return False
+    floor = ripple_floor(problem, count, values)
+    return floor > best.verification.key * (1 + FLOOR_MARGIN)
 
 
 def _user_gave(problem) -> bool:

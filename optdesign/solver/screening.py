@@ -396,6 +396,39 @@ def sampled_scores(problem, count, base, free, X, sampled: dict | None = None,
     return score, violation
 
 
+#: relative margin under which a sampled floor of δ is not taken to beat a verified δ: the
+#: screening's speed function and the exact evaluator's are the same arithmetic written apart,
+#: a few roundings from each other
+FLOOR_MARGIN = 1e-9
+
+
+def ripple_floor(problem, count: int, values: dict) -> float:
+    """A floor under the exact worst midrange δ of the design ``values`` over the listed
+    eccentricities: at each, the largest and the least value of the output's envelope (the
+    fastest rocker, or rest) on the screening's grid of crank angles are values the exact
+    envelope takes, so the exact ω_max is at least the one and the exact ω_min at most the
+    other, and δ = 2(ω_max − ω_min)/(ω_max + ω_min) grows with ω_max and falls with ω_min
+    (Sharkov & Kalinin 2022, the formula after eq. 8). No hand-over is interpolated (that
+    estimate may fall below the exact trough). NaN where the design does not assemble on the
+    grid, or for the time-mean ripple (no such floor: the sampled mean bounds nothing)."""
+    if problem.objective.ripple != "midrange":
+        return math.nan
+    model = problem.model
+    N = grid_samples(problem, count)
+    fmap = model.speeds_at_once(count, tuple(sorted(problem.options.items())))
+    lengths = {k: np.array([float(values[k])]) for k in model.lengths}
+    phi = np.linspace(0.0, 2 * np.pi, N, endpoint=False)[None, :]
+    floor = -math.inf
+    with np.errstate(all="ignore"):
+        for e in problem.eccentricities:
+            dth, _ = fmap(phi, np.repeat(parameter_rows(model, lengths, e), N, axis=1))
+            envelope = np.maximum(driving_speeds(dth, problem.stroke).max(axis=0), 0.0)
+            if not np.all(np.isfinite(envelope)):
+                return math.nan
+            floor = max(floor, float(ripple_of(envelope.max(), envelope.min(), None)))
+    return floor if math.isfinite(floor) else math.nan
+
+
 def parameter_rows(model, lengths: dict, e: float) -> np.ndarray:
     """The mechanism's lengths (arrays over the designs) as its functions' parameter rows at
     eccentricity ``e``: the regulated length scaled by ``e``, the others as they are."""

@@ -122,7 +122,9 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
     if not robust and _user_gave(problem):
         if work.best is None:           # no polish got there: polish from the user's design
             work.polish(given)
-        if not _beaten(problem, count, given, work.best):
+        # checked already beside a polish (its check in memory), or checked now unless the
+        # optimum beats it for certain
+        if given not in work.checked_later or not _beaten(problem, count, given, work.best):
             work.consider(basins.as_it_is(given))
     if not robust:
         _screened_floor(work, screening, basins)

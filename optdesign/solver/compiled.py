@@ -32,18 +32,19 @@ from __future__ import annotations
 
 import hashlib
 import platform
+from pathlib import Path
 
 import casadi as ca
 
-from optdesign.numerics.c_library import (COMPILER, FLAGS, Recipe, build, building,
-                                          builds_under_way, compiler, library, log, name_of,
-                                          start, warm_up)
-from optdesign.numerics.user_cache import MODES, VARIABLE, folder, mode
+from optdesign.numerics.c_library import (COMPILER, FLAGS, TRAILER_TAGS, Recipe, build,
+                                          building, builds_under_way, compiler, library, log,
+                                          name_of, start, warm_up)
+from optdesign.numerics.user_cache import MODES, VARIABLE, folder, intact, mode
 
 # the NLP's side of the C libraries, and the names callers of this module have always used
 __all__ = ["COMPILER", "MODES", "VARIABLE", "Recipe", "build", "building", "builds_under_way",
-           "compiler", "folder", "library", "mode", "name_of", "nlpsol", "recipe", "start",
-           "warm_up"]
+           "compiler", "folder", "library", "library_of", "mode", "name_of", "nlpsol",
+           "nlpsol_of", "recipe", "start", "warm_up"]
 
 #: the library's layout (its stamp function, its file names): part of the digest
 FORMAT = 1
@@ -60,10 +61,11 @@ def recipe(x, p, f, g, hessian: str) -> Recipe:
     return Recipe(function, serialized, hessian, digest.hexdigest())
 
 
-def nlpsol(name: str, x, p, f, g, opts: dict) -> ca.Function:
+def nlpsol(name: str, x, p, f, g, opts: dict, found: dict | None = None) -> ca.Function:
     """IPOPT on min f(x; p) s.t. g(x; p) with ``opts``: on the compiled library where one is
-    cached, else on the virtual machine, with a build started beside (``OPTDESIGN_COMPILE``
-    on and a compiler on PATH)."""
+    cached (its digest then put in ``found``, when given, as ``found["digest"]``), else on
+    the virtual machine, with a build started beside (``OPTDESIGN_COMPILE`` on and a
+    compiler on PATH)."""
     how = mode()
     if how != "off":
         hessian = opts.get("ipopt.hessian_approximation", "exact")
@@ -73,9 +75,30 @@ def nlpsol(name: str, x, p, f, g, opts: dict) -> ca.Function:
             path = library(rec, where) if where is not None else None
             if path is not None:
                 log.debug("the NLP's derivatives compiled: %s", path)
+                if found is not None:
+                    found["digest"] = rec.digest
                 return ca.nlpsol(name, "ipopt", str(path), opts)
             if how == "on" and where is not None:
                 start(rec, where)
         except (OSError, RuntimeError) as exc:     # a cache that fails costs the speed only
             log.debug("compiled derivatives not used (%s)", exc)
     return ca.nlpsol(name, "ipopt", {"x": x, "p": p, "f": f, "g": g}, opts)
+
+
+def library_of(digest: str) -> Path | None:
+    """The cached library of the NLP whose recipe has ``digest`` (:func:`recipe`), where it
+    is intact and the user's own (:func:`library`'s terms), else None."""
+    if mode() == "off":
+        return None
+    where = folder()
+    if where is None:
+        return None
+    path = where / f"{name_of(digest)}.so"
+    return path if intact(path, TRAILER_TAGS["nlp"], digest) else None
+
+
+def nlpsol_of(name: str, path: Path, opts: dict) -> ca.Function:
+    """IPOPT with ``opts`` on the NLP compiled into the library ``path``
+    (:func:`library_of`)."""
+    log.debug("the NLP's derivatives compiled: %s", path)
+    return ca.nlpsol(name, "ipopt", str(path), opts)

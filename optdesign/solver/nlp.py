@@ -51,7 +51,7 @@ from optdesign.quantities import get_quantity
 from optdesign.quantities.criteria import (constraints_of, interval_quantities, objective_of,
                                            spec_forms, spec_sides,
                                            quantity_specs)
-from optdesign.solver import compiled
+from optdesign.solver import compiled, nlp_memo
 from optdesign.solver.screening import iterations_of
 
 IPOPT_OPTIONS = {
@@ -410,9 +410,90 @@ class PhaseNLP:
         #: the C heap's bytes this NLP holds: its graph and each IPOPT built on it (what
         #: their builds left allocated, :mod:`optdesign.numerics.heap`; 0 where unknown)
         self.held_bytes = 0
+        #: the name of this NLP's record beside its compiled library (:mod:`.nlp_memo`: None
+        #: where nothing is cached), and the record, where one was read and used: then the
+        #: graph is built only when something asks for it (:meth:`__getattr__`)
+        self._record_key = nlp_memo.key_of(problem, count, self.slots, self.criteria,
+                                           IPOPT_OPTIONS)
+        self._record: dict | None = None
+        before = heap.in_use()
+        if not self._restored(nlp_memo.read(self._record_key)):
+            self._build()
+        self.held_bytes += heap.grown_since(before)
+
+    #: what only the graph holds: asked of an NLP made from its record, the graph is built
+    GRAPH = ("x_sym", "p_sym", "f", "g")
+
+    def __getattr__(self, name):
+        if name in self.GRAPH and self.__dict__.get("_record") is not None:
+            self._rebuilt()
+            return self.__dict__[name]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+    # ------------------------------------------------------------------ its record
+    def _restored(self, record: dict | None) -> bool:
+        """This NLP made from its ``record`` (:mod:`.nlp_memo`) instead of its graph: its
+        layout, what the build learns and its three small functions, where the record names
+        a library of the problem's Hessian that is intact; False (nothing set) otherwise."""
+        if record is None:
+            return False
+        digest = record.get("libraries", {}).get(self.problem.solver.hessian)
+        if not isinstance(digest, str) or compiled.library_of(digest) is None:
+            return False
+        try:
+            layout = Layout(*([Block(str(n), int(a), int(z)) for n, a, z in record["layout"][k]]
+                              for k in ("x", "g", "p")))
+            fill, surrogate, candidates = (ca.Function.deserialize(record["functions"][k])
+                                           for k in ("fill", "surrogate", "candidates"))
+            picks = [(str(n), None, str(w), str(t), bool(z)) for n, w, t, z in record["picks"]]
+            blocks = [(str(n), self.criteria[int(i)]) for n, i in record["criterion_blocks"]]
+            derived = dict.fromkeys(str(n) for n in record["derived"])
+            tracked = {(str(n), str(t)) for n, t in record["tracked"]}
+            turn = [str(n) for n in record["turn"]]
+            n_x, n_g, n_p = (int(record[k]) for k in ("n_x", "n_g", "n_p"))
+        except (KeyError, TypeError, ValueError, IndexError, RuntimeError):
+            return False
+        if fill.n_out() != len(derived) or candidates.n_out() != len(picks) or \
+                fill.nnz_in(0) != n_x or fill.nnz_in(1) != n_p:
+            return False
+        self.layout, self._fill, self.surrogate, self._candidates = layout, fill, surrogate, \
+            candidates
+        self._picks, self._criterion_blocks, self._derived = picks, blocks, derived
+        self._tracked, self.turn = tracked, turn
+        self.n_x, self.n_g, self.n_p = n_x, n_g, n_p
+        self._record = record
+        return True
+
+    def _rebuilt(self) -> None:
+        """The graph of an NLP made from its record, built now (the same layout and
+        functions as the record's: the build is the one that wrote it)."""
+        self._record = None
+        self.layout, self._picks, self._pick_params = Layout(), [], {}
+        self._tracked, self.turn = set(), []
         before = heap.in_use()
         self._build()
         self.held_bytes += heap.grown_since(before)
+
+    def _kept_as_record(self, hessian: str, digest: str) -> None:
+        """Keep this NLP's record (:mod:`.nlp_memo`), its library for ``hessian`` being the
+        one of ``digest`` (found cached: a record is written only beside a library)."""
+        if self._record_key is None:
+            return
+        known = nlp_memo.read(self._record_key) or {}
+        libraries = dict(known.get("libraries", {})) | {hessian: digest}
+        index = {id(c): i for i, c in enumerate(self.criteria)}
+        L = self.layout
+        nlp_memo.write(self._record_key, {
+            "libraries": libraries,
+            "layout": {k: [[b.name, b.start, b.size] for b in getattr(L, k)]
+                       for k in ("x", "g", "p")},
+            "functions": {"fill": self._fill.serialize(),
+                          "surrogate": self.surrogate.serialize(),
+                          "candidates": self._candidates.serialize()},
+            "picks": [[n, w, t, bool(z)] for n, _, w, t, z in self._picks],
+            "criterion_blocks": [[n, index[id(c)]] for n, c in self._criterion_blocks],
+            "derived": list(self._derived), "tracked": sorted(self._tracked),
+            "turn": list(self.turn), "n_x": self.n_x, "n_g": self.n_g, "n_p": self.n_p})
 
     # ------------------------------------------------------------------ building
     def _sample_function(self, fn) -> ca.Function:
@@ -678,8 +759,17 @@ class PhaseNLP:
                                           "ipopt.hessian_approximation": hessian,
                                           "iteration_callback": self.watch}
             before = heap.in_use()
-            self._solvers[hessian] = compiled.nlpsol(f"nlp_n{self.count}", self.x_sym,
-                                                     self.p_sym, self.f, self.g, opts)
+            name = f"nlp_n{self.count}"
+            digest = (self._record or {}).get("libraries", {}).get(hessian)
+            path = compiled.library_of(digest) if isinstance(digest, str) else None
+            if path is not None:            # made from its record: the library it names
+                self._solvers[hessian] = compiled.nlpsol_of(name, path, opts)
+            else:
+                found: dict = {}
+                self._solvers[hessian] = compiled.nlpsol(name, self.x_sym, self.p_sym, self.f,
+                                                         self.g, opts, found)
+                if "digest" in found:
+                    self._kept_as_record(hessian, found["digest"])
             self.held_bytes += heap.grown_since(before)
         return self._solvers[hessian]
 

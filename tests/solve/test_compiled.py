@@ -112,6 +112,31 @@ def test_a_solve_with_and_without_the_library_is_the_same_to_the_last_bit(cache,
     assert [p.delta for p in lib.per_phase] == [p.delta for p in vm.per_phase]
 
 
+def test_a_solve_made_from_the_nlps_record_builds_no_graph_and_is_the_same(cache,
+                                                                           monkeypatch):
+    """The first solve that finds the library builds the NLP's graph and keeps its record
+    beside the library (optdesign.solver.nlp_memo); the next process's solve (here: the
+    process's NLPs forgotten) makes the NLP from the record, builds no graph, loads the
+    same library and answers the same to the last bit."""
+    from optdesign.solver.nlp import PhaseNLP
+
+    where, problem, rec, path = cache
+    first = solve(problem)
+    assert list(where.glob("nlp-record-*.json"))
+    kept_nlps.forget()
+    builds, loaded = [], []
+    real_build, real_nlpsol = PhaseNLP._build, compiled.nlpsol_of
+    monkeypatch.setattr(PhaseNLP, "_build", lambda self: builds.append(self.count) or
+                        real_build(self))
+    monkeypatch.setattr(compiled, "nlpsol_of", lambda name, lib, opts: loaded.append(lib) or
+                        real_nlpsol(name, lib, opts))
+    again = solve(problem)
+    assert builds == [] and loaded == [path]
+    assert (again.status, again.delta, again.ratio, again.design, again.iterations) == \
+        (first.status, first.delta, first.ratio, first.design, first.iterations)
+    assert [p.delta for p in again.per_phase] == [p.delta for p in first.per_phase]
+
+
 def _falls_back(rec, problem, monkeypatch) -> list:
     """The builds a solve of ``problem`` starts (recorded, not run), asserting it ran on the
     virtual machine."""

@@ -1,0 +1,148 @@
+"""What an NLP is, kept on disk beside its compiled library: a later process skips its graph.
+
+A phase count's NLP (:class:`~optdesign.solver.nlp.PhaseNLP`) is a CasADi graph of tens of
+thousands of nodes, built in Python (0.01 s at 4 phases, 0.03 s at 24) and serialised once
+more to name its compiled library (:mod:`optdesign.solver.compiled`: the digest of the
+graph). Once the library is there, IPOPT needs nothing of the graph but the library; the
+solve needs the NLP's layout (where each variable, row and parameter sits), a few facts
+the build learns (the picks, the tracked quantities, the rows of each criterion) and three
+small functions of it (the running sums' start values, the surrogate's figures, the picks'
+candidates). Those are kept here, as a record named by everything the graph is made from:
+
+* the problem whole (its pickled form, as :func:`optdesign.solver.built.key_of` compares
+  problems in one process), the rows its mechanism's criteria give, the count, the hand-over
+  slots, IPOPT's options and ``OPTDESIGN_COMPILE``;
+* the code: the path, modification time and size of every file of the package;
+* what computes the graph's constants: the versions of Python, NumPy and CasADi, the machine,
+  the C library and NumPy's CPU features (a cache folder shared by two machines whose sine
+  differs in the last bit names two records).
+
+A record is written only for an NLP whose library was found (so the folder gains one small
+file per library, never one per problem a script runs through), read on the cache folder's
+terms (:mod:`optdesign.numerics.user_cache`: the user's own file, closed to others, sealed
+with its name and a checksum) and used only where the library it names is intact: else the
+graph is built as before. A record read gives the NLP the build would give, to the bit: the
+functions as CasADi serialised them, the layout as the build laid it out
+(``tests/solve/test_nlp_memo.py`` compares both, and the answers with and without records).
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import pickle
+import platform
+import stat
+import sys
+import time
+from functools import lru_cache
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from optdesign.numerics import user_cache
+
+#: the record's layout: part of its name
+FORMAT = 1
+#: the records' trailer tag (:mod:`optdesign.numerics.user_cache`)
+TAG = "optdesign-nlp-record"
+#: the package's folder, whose files' stamps name every record
+PACKAGE = Path(__file__).resolve().parents[1]
+
+
+def key_of(problem, count: int, slots: int, criteria, ipopt_options: dict) -> str | None:
+    """The name of the record of ``problem``'s NLP of ``count`` with ``slots`` hand-over
+    slots, its ``criteria`` (the constraints whose rows it holds) and ``ipopt_options`` (a
+    sha256 digest), or None where nothing is cached (``OPTDESIGN_COMPILE=off``)."""
+    how = user_cache.mode()
+    if how == "off":
+        return None
+    rows = [(type(c).__module__, type(c).__qualname__, c.name) for c in criteria]
+    digest = hashlib.sha256()
+    for part in (FORMAT, _environment(), how, sorted(ipopt_options.items()), rows,
+                 pickle.loads(pickle.dumps(problem)), int(count), int(slots)):
+        digest.update(hashlib.sha256(pickle.dumps(part)).digest())
+    return digest.hexdigest()
+
+
+def read(key: str | None) -> dict | None:
+    """The record named ``key``, or None: no folder in use, none kept, or one not to be
+    trusted or not to be read."""
+    if key is None:
+        return None
+    body = user_cache.kept(user_cache.in_use(), _name(key), TAG, key)
+    if body is None:
+        return None
+    try:
+        record = json.loads(body)
+    except ValueError:
+        return None
+    return record if isinstance(record, dict) and record.get("format") == FORMAT else None
+
+
+def write(key: str | None, record: dict) -> None:
+    """Keep ``record`` as ``key``'s (atomically; a failure costs the next process its graph),
+    and let go of the records written more than :data:`KEPT_DAYS` ago."""
+    where = user_cache.in_use()
+    if key is None or where is None:
+        return
+    body = json.dumps(record | {"format": FORMAT}, separators=(",", ":")).encode()
+    user_cache.keep(where / _name(key), TAG, key, body)
+    _let_go_of_old(where)
+
+
+#: a record is named by the package's files too, so every change of the code names new ones:
+#: one written this many days ago is removed when another is written (one still in use is
+#: written again by the next solve that finds its library, at the cost of one graph)
+KEPT_DAYS = 30
+
+
+def _let_go_of_old(where: Path) -> None:
+    """Remove this user's records (regular files named as :func:`_name` names them) written
+    more than :data:`KEPT_DAYS` ago."""
+    oldest = time.time() - KEPT_DAYS * 86400.0
+    try:
+        entries = [e for e in os.scandir(where)
+                   if e.name.startswith("nlp-record-") and e.name.endswith(".json")]
+    except OSError:
+        return
+    for entry in entries:
+        try:
+            st = entry.stat(follow_symlinks=False)
+            if stat.S_ISREG(st.st_mode) and st.st_uid == os.getuid() and st.st_mtime < oldest:
+                os.unlink(entry.path)
+        except OSError:
+            continue
+
+
+def _name(key: str) -> str:
+    return f"nlp-record-{key[:40]}.json"
+
+
+@lru_cache(maxsize=1)
+def _environment() -> tuple:
+    """What the graph's code and constants come from besides the problem: the package's
+    files (path, modification time, size), the interpreter's, NumPy's and CasADi's
+    versions, the machine, the C library and the CPU features NumPy dispatches on."""
+    files = hashlib.sha256()
+    for top, dirs, names in os.walk(PACKAGE):
+        dirs[:] = sorted(d for d in dirs if d != "__pycache__")
+        for name in sorted(names):
+            path = os.path.join(top, name)
+            try:
+                st = os.stat(path)
+            except OSError:
+                continue
+            files.update(f"{os.path.relpath(path, PACKAGE)}\0{st.st_mtime_ns}\0"
+                         f"{st.st_size}\n".encode("utf-8", "surrogateescape"))
+    try:
+        from numpy._core._multiarray_umath import __cpu_features__ as features
+    except ImportError:                     # (NumPy before 2)
+        from numpy.core._multiarray_umath import __cpu_features__ as features
+    try:
+        libc = os.confstr("CS_GNU_LIBC_VERSION") or ""
+    except (ValueError, OSError):
+        libc = ""
+    return (files.hexdigest(), str(PACKAGE), sys.version, np.__version__, ca.__version__,
+            platform.machine(), libc, sorted(k for k, on in features.items() if on))

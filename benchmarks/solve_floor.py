@@ -118,14 +118,18 @@ def child(case: str, repeats: int) -> dict:
     and how many of the NLPs it built ran on a compiled library."""
     from optdesign.solver import compiled
 
-    loaded, real = [], compiled.library
+    loaded, real, real_of = [], compiled.library, compiled.nlpsol_of
 
-    def library(rec, where):
+    def library(rec, where):            # an NLP built from its graph: on a library or not
         path = real(rec, where)
         loaded.append(path is not None)
         return path
 
-    compiled.library = library
+    def nlpsol_of(name, path, opts):    # one made from its record: on the library it names
+        loaded.append(True)
+        return real_of(name, path, opts)
+
+    compiled.library, compiled.nlpsol_of = library, nlpsol_of
     problem = load_case(case)
     t0 = time.perf_counter()
     import optdesign.solver.driver  # noqa: F401  (what a solve imports at its first call)

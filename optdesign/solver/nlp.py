@@ -416,6 +416,8 @@ class PhaseNLP:
         self._record_key = nlp_memo.key_of(problem, count, self.slots, self.criteria,
                                            IPOPT_OPTIONS)
         self._record: dict | None = None
+        #: per Hessian, the library checked intact as the record was read
+        self._libraries: dict = {}
         before = heap.in_use()
         if not self._restored(nlp_memo.read(self._record_key)):
             self._build()
@@ -437,8 +439,10 @@ class PhaseNLP:
         a library of the problem's Hessian that is intact; False (nothing set) otherwise."""
         if record is None:
             return False
-        digest = record.get("libraries", {}).get(self.problem.solver.hessian)
-        if not isinstance(digest, str) or compiled.library_of(digest) is None:
+        hessian = self.problem.solver.hessian
+        digest = record.get("libraries", {}).get(hessian)
+        path = compiled.library_of(digest) if isinstance(digest, str) else None
+        if path is None:
             return False
         try:
             layout = Layout(*([Block(str(n), int(a), int(z)) for n, a, z in record["layout"][k]]
@@ -462,6 +466,7 @@ class PhaseNLP:
         self._tracked, self.turn = tracked, turn
         self.n_x, self.n_g, self.n_p = n_x, n_g, n_p
         self._record = record
+        self._libraries[hessian] = path
         return True
 
     def _rebuilt(self) -> None:
@@ -760,8 +765,10 @@ class PhaseNLP:
                                           "iteration_callback": self.watch}
             before = heap.in_use()
             name = f"nlp_n{self.count}"
-            digest = (self._record or {}).get("libraries", {}).get(hessian)
-            path = compiled.library_of(digest) if isinstance(digest, str) else None
+            path = self._libraries.get(hessian) if self._record is not None else None
+            if path is None and self._record is not None:
+                digest = self._record.get("libraries", {}).get(hessian)
+                path = compiled.library_of(digest) if isinstance(digest, str) else None
             if path is not None:            # made from its record: the library it names
                 self._solvers[hessian] = compiled.nlpsol_of(name, path, opts)
             else:

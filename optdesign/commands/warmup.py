@@ -48,16 +48,30 @@ def run(args) -> int:
         else:
             print(f"{label}: {path}" + (f" (compiled in {seconds:.1f} s)"
                                         if note == "compiled" else f" ({note})"))
+    for nlp in nlps_of(problem):        # each NLP's record beside its library (nlp_memo)
+        nlp.solver(nlp.problem.solver.hessian)
     return 0 if ok else 1
 
 
 def recipes_of(problem) -> list[tuple]:
     """(label, :class:`~optdesign.solver.compiled.Recipe`) of every NLP a solve of
-    ``problem`` builds first: one per admissible count (and a robust solve's nominal one),
-    with as many hand-over slots as the driver gives it for the file's own design."""
+    ``problem`` builds first (:func:`nlps_of`)."""
+    from optdesign.solver import compiled
+
+    return [(f"{problem.model.count_variable} = {nlp.count}"
+             + (" (nominal)" if nlp.problem is not problem else ""),
+             compiled.recipe(nlp.x_sym, nlp.p_sym, nlp.f, nlp.g, nlp.problem.solver.hessian))
+            for nlp in nlps_of(problem)]
+
+
+def nlps_of(problem) -> list:
+    """The NLP a solve of ``problem`` builds first at every admissible count (and a robust
+    solve's nominal one), with as many hand-over slots as the driver gives it for the file's
+    own design: the process's own, kept (:mod:`optdesign.solver.built`), so asked twice they
+    are built once."""
     from dataclasses import replace
 
-    from optdesign.solver import compiled, verify
+    from optdesign.solver import verify
     from optdesign.solver.phase_solver import PhaseSolver
     from optdesign.solver.nlp import is_robust
 
@@ -68,11 +82,8 @@ def recipes_of(problem) -> list[tuple]:
     for count in problem.counts():
         given = problem.start_values() | {problem.model.count_variable: count}
         for which in problems:
-            nlp = PhaseSolver(which, count).nlp(verify(which, given, search=False).sequences)
-            out.append((f"{problem.model.count_variable} = {count}"
-                        + (" (nominal)" if which is not problem else ""),
-                        compiled.recipe(nlp.x_sym, nlp.p_sym, nlp.f, nlp.g,
-                                        which.solver.hessian)))
+            out.append(PhaseSolver(which, count).nlp(
+                verify(which, given, search=False).sequences))
     return out
 
 

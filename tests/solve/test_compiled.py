@@ -255,9 +255,14 @@ def test_one_build_beside_solves_at_a_time(tmp_path, monkeypatch, caplog):
 
 
 def test_warm_up_prints_where_the_libraries_are(cache, capsys, write_problem):
+    """... and keeps each NLP's record beside its library: the first solve after it builds
+    no graph (optdesign.solver.nlp_memo)."""
     where, problem, rec, path = cache
+    for record in where.glob("nlp-record-*.json"):
+        record.unlink()
     code, out = run_main(["warm-up", write_problem(vergov_data())])
     assert code == 0
+    assert len(list(where.glob("nlp-record-*.json"))) == 1
     nlp, *lanes = out.strip().splitlines()
     assert nlp == f"sections = 3: {path} (cached)"
     assert [line.split(":")[0] for line in lanes] == ["sections = 3, kinematics lanes",

@@ -314,6 +314,13 @@ class _Builder:
         self.g.append(expr)
 
 
+def _library_named(record: dict, hessian: str):
+    """The intact compiled library an NLP's record names for ``hessian``, or None."""
+    libraries = record.get("libraries")
+    digest = libraries.get(hessian) if isinstance(libraries, dict) else None
+    return compiled.library_of(digest) if isinstance(digest, str) else None
+
+
 def smooth_max(values, rho):
     """log-sum-exp maximum, (1/ρ)·log Σ exp(ρ·v) >= max v, shifted by max v for stability.
 
@@ -440,8 +447,7 @@ class PhaseNLP:
         if record is None:
             return False
         hessian = self.problem.solver.hessian
-        digest = record.get("libraries", {}).get(hessian)
-        path = compiled.library_of(digest) if isinstance(digest, str) else None
+        path = _library_named(record, hessian)
         if path is None:
             return False
         try:
@@ -484,8 +490,8 @@ class PhaseNLP:
         one of ``digest`` (found cached: a record is written only beside a library)."""
         if self._record_key is None:
             return
-        known = nlp_memo.read(self._record_key) or {}
-        libraries = dict(known.get("libraries", {})) | {hessian: digest}
+        known = (nlp_memo.read(self._record_key) or {}).get("libraries")
+        libraries = (known if isinstance(known, dict) else {}) | {hessian: digest}
         index = {id(c): i for i, c in enumerate(self.criteria)}
         L = self.layout
         nlp_memo.write(self._record_key, {
@@ -765,10 +771,9 @@ class PhaseNLP:
                                           "iteration_callback": self.watch}
             before = heap.in_use()
             name = f"nlp_n{self.count}"
-            path = self._libraries.get(hessian) if self._record is not None else None
-            if path is None and self._record is not None:
-                digest = self._record.get("libraries", {}).get(hessian)
-                path = compiled.library_of(digest) if isinstance(digest, str) else None
+            path = None
+            if self._record is not None:
+                path = self._libraries.get(hessian) or _library_named(self._record, hessian)
             if path is not None:            # made from its record: the library it names
                 self._solvers[hessian] = compiled.nlpsol_of(name, path, opts)
             else:

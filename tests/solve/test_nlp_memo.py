@@ -123,3 +123,17 @@ def test_records_written_long_ago_are_let_go_of_when_one_is_written(cache):
     _with_record(problem_from_dict(file_data(DISC)), 6)
     assert not old.exists() and recent.exists()
     assert linked.is_symlink() and outside.read_text() == "kept"
+
+
+@pytest.mark.parametrize("change", [{"libraries": ["not", "a", "mapping"]},
+                                    {"layout": None}, {"functions": {"fill": "not CasADi"}},
+                                    {"n_x": 1}])
+def test_a_sealed_record_that_does_not_read_as_one_is_passed_over(cache, change):
+    """A record sealed as the cache seals its files but whose fields are not an NLP's (a
+    record of a later format written under this one's name, say): the graph is built."""
+    problem = problem_from_dict(file_data(DISC))
+    graph, _ = _with_record(problem, 6)
+    key = graph._record_key
+    nlp_memo.write(key, nlp_memo.read(key) | change)
+    made = PhaseNLP(problem, 6)
+    assert made._record is None and made.layout == graph.layout

@@ -126,16 +126,25 @@ def _environment() -> tuple:
     files (path, modification time, size), the interpreter's, NumPy's and CasADi's
     versions, the machine, the C library and the CPU features NumPy dispatches on."""
     files = hashlib.sha256()
-    for top, dirs, names in os.walk(PACKAGE):
-        dirs[:] = sorted(d for d in dirs if d != "__pycache__")
-        for name in sorted(names):
-            path = os.path.join(top, name)
+    folders = [""]
+    while folders:
+        folder = folders.pop()
+        try:
+            entries = sorted(os.scandir(PACKAGE / folder), key=lambda e: e.name)
+        except OSError:
+            continue
+        for entry in entries:
+            name = f"{folder}/{entry.name}" if folder else entry.name
             try:
-                st = os.stat(path)
+                if entry.is_dir(follow_symlinks=False):
+                    if entry.name != "__pycache__":
+                        folders.append(name)
+                    continue
+                st = entry.stat()
             except OSError:
                 continue
-            files.update(f"{os.path.relpath(path, PACKAGE)}\0{st.st_mtime_ns}\0"
-                         f"{st.st_size}\n".encode("utf-8", "surrogateescape"))
+            files.update(f"{name}\0{st.st_mtime_ns}\0{st.st_size}\n".encode(
+                "utf-8", "surrogateescape"))
     try:
         from numpy._core._multiarray_umath import __cpu_features__ as features
     except ImportError:                     # (NumPy before 2)

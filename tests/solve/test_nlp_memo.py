@@ -137,3 +137,34 @@ def test_a_sealed_record_that_does_not_read_as_one_is_passed_over(cache, change)
     nlp_memo.write(key, nlp_memo.read(key) | change)
     made = PhaseNLP(problem, 6)
     assert made._record is None and made.layout == graph.layout
+
+
+def test_the_records_names_change_with_any_file_of_the_package(tmp_path, monkeypatch):
+    """The stamp of the package's files (path, modification time, size) names every record:
+    a file changed in place, one added, or one in a subfolder changed names new records; the
+    compiled bytecode's folder does not count."""
+    import os
+
+    package = tmp_path / "package"
+    (package / "sub" / "__pycache__").mkdir(parents=True)
+    (package / "a.py").write_text("x = 1\n")
+    (package / "sub" / "b.py").write_text("y = 2\n")
+    monkeypatch.setattr(nlp_memo, "PACKAGE", package)
+
+    def stamp():
+        nlp_memo._environment.cache_clear()
+        return nlp_memo._environment()[0]           # the files' stamp
+
+    seen = [stamp()]
+    (package / "sub" / "__pycache__" / "b.pyc").write_bytes(b"bytecode")
+    assert stamp() == seen[0]
+    st = os.stat(package / "a.py")
+    (package / "a.py").write_text("x = 3\n")                    # the same size
+    os.utime(package / "a.py", ns=(st.st_atime_ns, st.st_mtime_ns + 1))
+    seen.append(stamp())
+    (package / "sub" / "b.py").write_text("y = 22\n")
+    seen.append(stamp())
+    (package / "c.py").write_text("")
+    seen.append(stamp())
+    nlp_memo._environment.cache_clear()
+    assert len(set(seen)) == 4

@@ -38,18 +38,24 @@ def run(args) -> int:
         print(f"optdesign warm-up: no C compiler ({compiled.COMPILER}) on PATH: solves run "
               f"on CasADi's virtual machine", file=sys.stderr)
         return 1
-    labels, recipes = zip(*(recipes_of(problem) + lanes_recipes_of(problem)))
-    ok = True
+    nlps = recipes_of(problem)
+    labels, recipes = zip(*(nlps + lanes_recipes_of(problem)))
+    ok, built = True, []
     for label, (_, path, seconds, note) in zip(labels, compiled.warm_up(
             recipes, where, local_processes(problem.solver.workers))):
+        built.append(path is not None)
         if path is None:
             ok = False
             print(f"{label}: not compiled ({note}): runs on CasADi's virtual machine")
         else:
             print(f"{label}: {path}" + (f" (compiled in {seconds:.1f} s)"
                                         if note == "compiled" else f" ({note})"))
-    for nlp in nlps_of(problem):        # each NLP's record beside its library (nlp_memo)
-        nlp.solver(nlp.problem.solver.hessian)
+    # each compiled NLP's record beside its library (optdesign.solver.nlp_memo), kept as its
+    # IPOPT is made on the library (an NLP left on the virtual machine is not made here: its
+    # derivatives' functions would take seconds to build)
+    for nlp, on_library in zip(nlps_of(problem), built[:len(nlps)]):
+        if on_library:
+            nlp.solver(nlp.problem.solver.hessian)
     return 0 if ok else 1
 
 

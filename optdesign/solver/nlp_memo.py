@@ -17,8 +17,9 @@ candidates). Those are kept here, as a record named by everything the graph is m
   the C library and NumPy's CPU features (a cache folder shared by two machines whose sine
   differs in the last bit names two records).
 
-A record is written only for an NLP whose library was found (so the folder gains one small
-file per library, never one per problem a script runs through), read on the cache folder's
+A record is written only for an NLP whose library was found (never one for each NLP a script
+of many distinct problems runs through: those have no library), at most
+:data:`KEPT_RECORDS` of them for :data:`KEPT_DAYS` each; it is read on the cache folder's
 terms (:mod:`optdesign.numerics.user_cache`: the user's own file, closed to others, sealed
 with its name and a checksum) and used only where the library it names is intact: else the
 graph is built as before. A record read gives the NLP the build would give, to the bit: the
@@ -96,24 +97,36 @@ def write(key: str | None, record: dict) -> None:
 #: one written this many days ago is removed when another is written (one still in use is
 #: written again by the next solve that finds its library, at the cost of one graph)
 KEPT_DAYS = 30
+#: ... and at most this many are kept, the oldest let go first: a record is named by the whole
+#: problem, so a script that solves one problem under many bounds (its NLP's graph and library
+#: the same) writes one for each (0.1 to 0.4 MB each for the race's problems)
+KEPT_RECORDS = 128
 
 
 def _let_go_of_old(where: Path) -> None:
     """Remove this user's records (regular files named as :func:`_name` names them) written
-    more than :data:`KEPT_DAYS` ago."""
+    more than :data:`KEPT_DAYS` ago, and the oldest beyond :data:`KEPT_RECORDS`."""
     oldest = time.time() - KEPT_DAYS * 86400.0
     try:
         entries = [e for e in os.scandir(where)
                    if e.name.startswith("nlp-record-") and e.name.endswith(".json")]
     except OSError:
         return
+    records = []
     for entry in entries:
         try:
             st = entry.stat(follow_symlinks=False)
-            if stat.S_ISREG(st.st_mode) and st.st_uid == os.getuid() and st.st_mtime < oldest:
-                os.unlink(entry.path)
         except OSError:
             continue
+        if stat.S_ISREG(st.st_mode) and st.st_uid == os.getuid():
+            records.append((st.st_mtime, entry.path))
+    records.sort(reverse=True)                  # the newest first
+    for k, (written, path) in enumerate(records):
+        if k >= KEPT_RECORDS or written < oldest:
+            try:
+                os.unlink(path)
+            except OSError:
+                continue
 
 
 def _name(key: str) -> str:

@@ -103,11 +103,21 @@ def test_a_corrupt_record_or_one_whose_library_is_gone_is_passed_over(cache):
     assert made._record is None and made.layout == graph.layout
 
 
-def test_records_written_long_ago_are_let_go_of_when_one_is_written(cache):
+def test_records_written_long_ago_are_let_go_of_when_one_is_written(cache, monkeypatch):
     """Every change of the package's files names new records: one written more than
-    KEPT_DAYS ago goes when another is written (a link of that name is not followed)."""
+    KEPT_DAYS ago goes when another is written, and the oldest beyond KEPT_RECORDS (a link of
+    that name is not followed)."""
     import os
     import time
+
+    monkeypatch.setattr(nlp_memo, "KEPT_RECORDS", 3)
+    older = []
+    for k in range(3):                  # written 1, 2 and 3 days ago: the 3rd oldest is cut
+        path = cache / (f"nlp-record-{k:040d}.json")
+        path.write_text("{}")
+        when = time.time() - (k + 1) * 86400
+        os.utime(path, (when, when))
+        older.append(path)
 
     old = cache / ("nlp-record-" + "c" * 40 + ".json")
     old.write_text("{}")
@@ -123,6 +133,8 @@ def test_records_written_long_ago_are_let_go_of_when_one_is_written(cache):
     _with_record(problem_from_dict(file_data(DISC)), 6)
     assert not old.exists() and recent.exists()
     assert linked.is_symlink() and outside.read_text() == "kept"
+    # kept: the new one, `recent` (now) and the newest of the older ones
+    assert [p.exists() for p in older] == [True, False, False]
 
 
 @pytest.mark.parametrize("change", [{"libraries": ["not", "a", "mapping"]},

@@ -55,10 +55,12 @@ def _same(made: PhaseNLP, graph: PhaseNLP) -> None:
 
 
 @pytest.mark.parametrize("name, count", [("sharkov2022_disc_interval", 6),
-                                         ("vergov_solve", 5), ("spreader", 8)])
+                                         ("vergov_solve", 5), ("spreader", 8),
+                                         ("robust_fourbar", 4)])
 def test_an_nlp_made_from_its_record_is_the_one_its_graph_gives(cache, name, count):
     """A regulation interval (eccentricity slots, tracked quantities), a slotted lever, a
-    ratio band with a housing bound (picks of attained figures)."""
+    ratio band with a housing bound (picks of attained figures), a robust problem (its
+    scenario parts' blocks)."""
     problem = problem_from_dict(file_data(ROOT / "problems" / f"{name}.yaml"))
     graph, _ = _with_record(problem, count)
     made = PhaseNLP(problem, count)

@@ -120,12 +120,13 @@ def child(case: str, repeats: int) -> dict:
 
     loaded, real, real_of = [], compiled.library, compiled.nlpsol_of
 
-    def library(rec, where):            # an NLP built from its graph: on a library or not
+    def library(rec, where):            # an NLP built from its graph that finds no library
         path = real(rec, where)
-        loaded.append(path is not None)
+        if path is None:
+            loaded.append(False)
         return path
 
-    def nlpsol_of(name, path, opts):    # one made from its record: on the library it names
+    def nlpsol_of(name, path, opts):    # IPOPT on a library (from the graph or the record)
         loaded.append(True)
         return real_of(name, path, opts)
 

@@ -38,8 +38,8 @@ def run(args) -> int:
         print(f"optdesign warm-up: no C compiler ({compiled.COMPILER}) on PATH: solves run "
               f"on CasADi's virtual machine", file=sys.stderr)
         return 1
-    nlps = recipes_of(problem)
-    labels, recipes = zip(*(nlps + lanes_recipes_of(problem)))
+    nlps = nlps_of(problem)
+    labels, recipes = zip(*(_recipes(problem, nlps) + lanes_recipes_of(problem)))
     ok, built = True, []
     for label, (_, path, seconds, note) in zip(labels, compiled.warm_up(
             recipes, where, local_processes(problem.solver.workers))):
@@ -53,7 +53,7 @@ def run(args) -> int:
     # each compiled NLP's record beside its library (optdesign.solver.nlp_memo), kept as its
     # IPOPT is made on the library (an NLP left on the virtual machine is not made here: its
     # derivatives' functions would take seconds to build)
-    for nlp, on_library in zip(nlps_of(problem), built[:len(nlps)]):
+    for nlp, on_library in zip(nlps, built):
         if on_library:
             nlp.solver(nlp.problem.solver.hessian)
     return 0 if ok else 1
@@ -62,12 +62,17 @@ def run(args) -> int:
 def recipes_of(problem) -> list[tuple]:
     """(label, :class:`~optdesign.solver.compiled.Recipe`) of every NLP a solve of
     ``problem`` builds first (:func:`nlps_of`)."""
+    return _recipes(problem, nlps_of(problem))
+
+
+def _recipes(problem, nlps: list) -> list[tuple]:
+    """(label, recipe) of each of ``nlps``, ``problem``'s (:func:`nlps_of`)."""
     from optdesign.solver import compiled
 
     return [(f"{problem.model.count_variable} = {nlp.count}"
              + (" (nominal)" if nlp.problem is not problem else ""),
              compiled.recipe(nlp.x_sym, nlp.p_sym, nlp.f, nlp.g, nlp.problem.solver.hessian))
-            for nlp in nlps_of(problem)]
+            for nlp in nlps]
 
 
 def nlps_of(problem) -> list:

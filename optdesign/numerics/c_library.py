@@ -154,8 +154,14 @@ def library(rec: Recipe, where: Path) -> Path | None:
     this user's, writable by group or others, cut short or changed since it was built (its
     trailer's checksum), or built from something else (its trailer's digest). Checked before
     it is loaded: a library cut short would crash the process that maps it."""
-    path = where / f"{rec.name}.so"
-    return path if intact(path, TRAILER_TAGS[rec.kind], rec.digest) else None
+    return library_named(where, rec.digest, rec.kind)
+
+
+def library_named(where: Path, digest: str, kind: str = "nlp") -> Path | None:
+    """:func:`library` of the recipe of ``digest`` and ``kind``, from its digest alone (an
+    NLP's record names its library so: :mod:`optdesign.solver.nlp_memo`)."""
+    path = where / f"{name_of(digest, kind)}.so"
+    return path if intact(path, TRAILER_TAGS[kind], digest) else None
 
 
 def _lock(where: Path, name: str) -> bool:

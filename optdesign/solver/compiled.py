@@ -36,10 +36,10 @@ from pathlib import Path
 
 import casadi as ca
 
-from optdesign.numerics.c_library import (COMPILER, FLAGS, TRAILER_TAGS, Recipe, build,
-                                          building, builds_under_way, compiler, library, log,
-                                          name_of, start, warm_up)
-from optdesign.numerics.user_cache import MODES, VARIABLE, folder, intact, mode
+from optdesign.numerics.c_library import (COMPILER, FLAGS, Recipe, build, building,
+                                          builds_under_way, compiler, library, library_named,
+                                          log, name_of, start, warm_up)
+from optdesign.numerics.user_cache import MODES, VARIABLE, folder, mode
 
 # the NLP's side of the C libraries, and the names callers of this module have always used
 __all__ = ["COMPILER", "MODES", "VARIABLE", "Recipe", "build", "building", "builds_under_way",
@@ -74,10 +74,9 @@ def nlpsol(name: str, x, p, f, g, opts: dict, found: dict | None = None) -> ca.F
             where = folder()
             path = library(rec, where) if where is not None else None
             if path is not None:
-                log.debug("the NLP's derivatives compiled: %s", path)
                 if found is not None:
                     found["digest"] = rec.digest
-                return ca.nlpsol(name, "ipopt", str(path), opts)
+                return nlpsol_of(name, path, opts)
             if how == "on" and where is not None:
                 start(rec, where)
         except (OSError, RuntimeError) as exc:     # a cache that fails costs the speed only
@@ -88,13 +87,8 @@ def nlpsol(name: str, x, p, f, g, opts: dict, found: dict | None = None) -> ca.F
 def library_of(digest: str) -> Path | None:
     """The cached library of the NLP whose recipe has ``digest`` (:func:`recipe`), where it
     is intact and the user's own (:func:`library`'s terms), else None."""
-    if mode() == "off":
-        return None
-    where = folder()
-    if where is None:
-        return None
-    path = where / f"{name_of(digest)}.so"
-    return path if intact(path, TRAILER_TAGS["nlp"], digest) else None
+    where = folder() if mode() != "off" else None
+    return library_named(where, digest) if where is not None else None
 
 
 def nlpsol_of(name: str, path: Path, opts: dict) -> ca.Function:

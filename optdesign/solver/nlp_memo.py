@@ -43,12 +43,13 @@ import casadi as ca
 import numpy as np
 
 from optdesign.numerics import user_cache
+from optdesign.warm.place import package_stamp
 
 #: the record's layout: part of its name
 FORMAT = 1
 #: the records' trailer tag (:mod:`optdesign.numerics.user_cache`)
 TAG = "optdesign-nlp-record"
-#: the package's folder, whose files' stamps name every record
+#: the package's folder, whose files' stamps name every record (:func:`package_stamp`)
 PACKAGE = Path(__file__).resolve().parents[1]
 
 
@@ -138,26 +139,6 @@ def _environment() -> tuple:
     """What the graph's code and constants come from besides the problem: the package's
     files (path, modification time, size), the interpreter's, NumPy's and CasADi's
     versions, the machine, the C library and the CPU features NumPy dispatches on."""
-    files = hashlib.sha256()
-    folders = [""]
-    while folders:
-        folder = folders.pop()
-        try:
-            entries = sorted(os.scandir(PACKAGE / folder), key=lambda e: e.name)
-        except OSError:
-            continue
-        for entry in entries:
-            name = f"{folder}/{entry.name}" if folder else entry.name
-            try:
-                if entry.is_dir(follow_symlinks=False):
-                    if entry.name != "__pycache__":
-                        folders.append(name)
-                    continue
-                st = entry.stat()
-            except OSError:
-                continue
-            files.update(f"{name}\0{st.st_mtime_ns}\0{st.st_size}\n".encode(
-                "utf-8", "surrogateescape"))
     try:
         from numpy._core._multiarray_umath import __cpu_features__ as features
     except ImportError:                     # (NumPy before 2)
@@ -166,5 +147,5 @@ def _environment() -> tuple:
         libc = os.confstr("CS_GNU_LIBC_VERSION") or ""
     except (ValueError, OSError):
         libc = ""
-    return (files.hexdigest(), str(PACKAGE), sys.version, np.__version__, ca.__version__,
+    return (package_stamp(PACKAGE), str(PACKAGE), sys.version, np.__version__, ca.__version__,
             platform.machine(), libc, sorted(k for k, on in features.items() if on))

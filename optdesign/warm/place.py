@@ -19,6 +19,7 @@ standard library only: the client runs it before anything else.
 """
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import stat
@@ -135,7 +136,7 @@ def fingerprint(env=os.environ) -> str:
              if name != "utf8_mode"]
     return json.dumps({"python": [sys.executable, sys.version, flags, sys.warnoptions,
                                   sys._xoptions], "encodings": text_encodings(),
-                       "path": paths, "package": [str(PACKAGE), _package_sum()],
+                       "path": paths, "package": [str(PACKAGE), package_stamp()],
                        "environment": names}, sort_keys=True)
 
 
@@ -149,16 +150,30 @@ def text_encodings() -> list[str]:
             codecs.lookup(locale.getpreferredencoding(False)).name]
 
 
-def _package_sum() -> int:
-    """A checksum of the name, modification time and size of every file of the package."""
-    total = 0
-    for top, dirs, files in os.walk(PACKAGE):
-        dirs[:] = sorted(d for d in dirs if d != "__pycache__")
-        for name in sorted(files):
+def package_stamp(folder: Path | None = None) -> str:
+    """A sha256 digest of the relative path, modification time and size of every file under
+    ``folder`` (the package's by default), its bytecode folders aside: what names the code a
+    server runs (:func:`fingerprint`) and what an NLP's record was built by
+    (:mod:`optdesign.solver.nlp_memo`). A file changed in place, added or removed changes it."""
+    folder = PACKAGE if folder is None else folder
+    files = hashlib.sha256()
+    folders = [""]
+    while folders:
+        sub = folders.pop()
+        try:
+            entries = sorted(os.scandir(folder / sub), key=lambda e: e.name)
+        except OSError:
+            continue
+        for entry in entries:
+            name = f"{sub}/{entry.name}" if sub else entry.name
             try:
-                st = os.stat(os.path.join(top, name))
+                if entry.is_dir(follow_symlinks=False):
+                    if entry.name != "__pycache__":
+                        folders.append(name)
+                    continue
+                st = entry.stat()
             except OSError:
                 continue
-            line = f"{top}/{name}\0{st.st_mtime_ns}\0{st.st_size}\n"
-            total = zlib.crc32(line.encode("utf-8", "surrogateescape"), total)
-    return total
+            files.update(f"{name}\0{st.st_mtime_ns}\0{st.st_size}\n".encode(
+                "utf-8", "surrogateescape"))
+    return files.hexdigest()

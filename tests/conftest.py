@@ -25,8 +25,14 @@ PAPER = dict(l0=225.0, l1=20.0, l2=225.0, l2_prime=100.0, l3=56.0, phases=6)
 def _no_nlp_built_under_a_patch(request):
     """A test that patches code (``monkeypatch``) keeps no NLP for the tests after it: an
     NLP built under a patched mechanism, criterion or option would be given to a later solve
-    of an equal problem (optdesign.solver.built)."""
+    of an equal problem (optdesign.solver.built). No test shares a kept child with another
+    (optdesign.kept_children): one forked before a patch would run the code unpatched, one
+    forked under it the patched code, and a test may count the children it leaves."""
+    from optdesign import kept_children
+
+    kept_children.end_all()
     yield
+    kept_children.end_all()
     if "monkeypatch" in request.fixturenames:
         from optdesign.solver import built
         built.forget()

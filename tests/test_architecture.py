@@ -137,11 +137,11 @@ def test_the_check_finds_a_circle_when_there_is_one():
 
 def test_the_package_root_holds_only_its_doors_and_leaves():
     """The root keeps the API, the command line, and the leaves every layer needs (errors,
-    key declarations, child-process lifetime, the limits of counts); everything else lives in
-    a named package."""
+    key declarations, child-process lifetime and the children kept, the limits of counts);
+    everything else lives in a named package."""
     flat = sorted(p.name for p in PACKAGE.glob("*.py"))
     assert flat == ["__init__.py", "__main__.py", "api.py", "cli.py", "declarations.py",
-                    "errors.py", "lifetime.py", "limits.py"]
+                    "errors.py", "kept_children.py", "lifetime.py", "limits.py"]
 
 
 def test_a_new_constraint_is_one_object(monkeypatch):

@@ -9,6 +9,9 @@ read it instead of sampling the design again.
 """
 from __future__ import annotations
 
+import itertools
+import os
+
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -245,16 +248,38 @@ _REFINED: dict = {}
 _REFINED_SIZE = 8
 
 
-def forget() -> None:
+#: the memory's generation (:func:`generation`): this process's pid and a count of forgets
+_FORGOTTEN = itertools.count(1)
+_GENERATION = [(0, 0)]
+
+
+def forget(generation: tuple | None = None) -> None:
     """Let go of every evaluation kept (:data:`_EVALUATED`, :data:`_WORST_CACHE`,
     :data:`_REFINED`, and the turn quantities' maxima,
     :func:`optdesign.quantities.base.forget_maxima`): the next evaluation of any design is
     made anew. For a measure of what a new problem costs a warm process: a solve of a problem
-    solved before reads its designs' figures from here."""
+    solved before reads its designs' figures from here. The memory's :func:`generation`
+    becomes a new one (``generation``: that of the process a kept child computes for, whose
+    memory it follows: :func:`optdesign.solver.polishing._polish_of`)."""
     _EVALUATED.clear()
     _WORST_CACHE.clear()
     _REFINED.clear()
     forget_maxima()
+    _GENERATION[0] = generation or (os.getpid(), next(_FORGOTTEN))
+
+
+def generation() -> tuple:
+    """Which emptying of the evaluator's memory this process's is since (:func:`forget`):
+    a kept child whose memory is of another empties its own too (:func:`follow`)."""
+    return _GENERATION[0]
+
+
+def follow(generation: tuple) -> None:
+    """Empty this process's memory of evaluations where it is not of ``generation`` (that
+    of the process a kept child computes for, :mod:`optdesign.kept_children`): its memory
+    then holds no more than a child forked now would inherit."""
+    if generation != _GENERATION[0]:
+        forget(generation)
 
 
 def _worst_of(problem, design: Design) -> RangeWorst:

@@ -80,6 +80,13 @@ def kept(problem, count: int) -> dict:
     return nlps
 
 
+def held() -> frozenset:
+    """(key, slots) of every NLP kept in this process (:func:`key_of`): what a process
+    forked now holds built."""
+    with _lock:
+        return frozenset((key, slots) for key, nlps in _kept.items() for slots in nlps)
+
+
 def held_bytes() -> int:
     """The C heap's bytes the kept NLPs hold (as their builds measured them)."""
     return sum(nlp.held_bytes for nlps in _kept.values() for nlp in nlps.values())

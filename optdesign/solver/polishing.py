@@ -13,11 +13,13 @@ from contextlib import nullcontext
 from functools import partial
 
 from optdesign.evaluation.design import Design
-from optdesign import lifetime
-from optdesign.evaluation.figures import eccentricities_of, remember
+from optdesign import kept_children
+from optdesign.envelope.sampled import STROKE_SIGNS
+from optdesign.evaluation.figures import eccentricities_of, follow, generation, remember
 from optdesign.numerics import lanes
 from optdesign.quantities import design_quantities
 from optdesign.solver.accuracy import refined_figures
+from optdesign.solver import built
 from optdesign.solver.phase_solver import (AS_IT_IS, EXHAUSTED, JOINED, STALLED, SUCCESS,
                                            Outcome, PhaseSolver, Timings)
 from optdesign.solver.result import PhaseResult, StartRecord
@@ -282,9 +284,10 @@ class Polishing:
 
     def _polish_ahead(self, values: dict):
         """:meth:`polish` of ``values`` with what the solve knows now, begun in a process
-        forked beside this one (:func:`optdesign.lifetime.beside`)."""
-        return lifetime.beside(_polish_here, self.solver, values,
-                               [o.values for o in self.optima], self.converged())
+        beside this one (:func:`_beside`)."""
+        return _beside(self.problem, self.count, self.solver.held_slots(),
+                       self.solver.checks_in_parallel, values,
+                       [o.values for o in self.optima], self.converged())
 
     def _record_made(self, outcome: Outcome, timings: Timings, built_slots=(),
                      beside: bool = False) -> Outcome:
@@ -384,9 +387,37 @@ def _head_beside(problem, count: int, starts: list[dict], checks_in_parallel: bo
     this process, on the same memory: the outcome is the same to the bit. The first also
     checks ``checks`` as they are, once its polish is done."""
     secondary = [True] * len(starts) if secondary is None else secondary
-    return [lifetime.beside(_polish_here, _of_its_own(problem, count, checks_in_parallel),
-                            values, [], secondary[k], checks if k == 0 else ())
+    return [_beside(problem, count, (), checks_in_parallel, values, [], secondary[k],
+                    checks if k == 0 else ())
             for k, values in enumerate(starts)]
+
+
+def _beside(problem, count: int, held: tuple, checks_in_parallel: bool, values: dict,
+            avoid: list[dict], secondary: bool, checks=()):
+    """:func:`_polish_here` of ``values`` by a solver of the count that holds the NLPs of
+    ``held`` slots (in that order), begun in a process beside this one: a child kept for
+    such polishes that holds those NLPs and the one of a slot per curve
+    (:func:`optdesign.kept_children.beside`), else one forked now, which inherits every NLP
+    this process holds (:mod:`optdesign.solver.built`). The same polish as here."""
+    key = built.key_of(problem, count)
+    curves = count * len(STROKE_SIGNS[problem.stroke])
+    return kept_children.beside(_polish_of, problem, count, tuple(held), checks_in_parallel,
+                                values, avoid, secondary, tuple(checks), generation(),
+                                needs={(key, slots) for slots in (*held, curves)},
+                                inherits=built.held)
+
+
+def _polish_of(problem, count: int, held: tuple, checks_in_parallel: bool, values: dict,
+               avoid: list[dict], secondary: bool, checks: tuple, forgotten: tuple):
+    """:func:`_polish_here` by a solver of the count holding the NLPs of ``held`` slots, in
+    that order (in a kept child: its own, :mod:`optdesign.solver.built`), the evaluator's
+    memory emptied first where the process that asked emptied its own since this one last
+    did (``forgotten``: its :func:`~optdesign.evaluation.figures.generation`)."""
+    follow(forgotten)
+    solver = _of_its_own(problem, count, checks_in_parallel)
+    for slots in held:
+        solver.nlp_of(slots)
+    return _polish_here(solver, values, avoid, secondary, checks)
 
 
 def _polish_here(solver: "PhaseSolver", values: dict, avoid: list[dict], secondary: bool,

@@ -275,7 +275,7 @@ def test_a_wait_for_a_polish_beside_makes_what_the_solve_asks_for_later(
     steps find them made (on the housing problem the first polish's optimum stays the best).
     Every record, the accuracy record and the answer are the one-worker solve's, to the
     bit."""
-    from optdesign import lifetime
+    from optdesign import kept_children, lifetime
 
     made = []
     while_waiting = polishing.Polishing._while_waiting
@@ -297,6 +297,7 @@ def test_a_wait_for_a_polish_beside_makes_what_the_solve_asks_for_later(
     calls = []
     exact_figures, screen_rows = figures.exact_figures, LineScreening._screen
     monkeypatch.setattr(lifetime.Beside, "ready", lambda self: False)
+    monkeypatch.setattr(kept_children.Kept, "ready", lambda self: False)
     monkeypatch.setattr(polishing.Polishing, "_while_waiting", logged)
     monkeypatch.setattr(LineScreening, "_screen", lines_screened)
     monkeypatch.setattr(figures, "exact_figures", refined)
@@ -341,3 +342,20 @@ def test_the_files_own_design_is_checked_beside_once_its_polish_is_done(
     one, _ = logged_polishes("sharkov2022_disc", 1)
     assert answer(two) == answer(one) and _records(two) == _records(one)
     assert own in evaluated and own not in checked_here
+
+
+def test_a_second_solve_polishes_beside_in_the_kept_child_and_answers_the_same(
+        fresh, logged_polishes):
+    """A second solve of a problem in one process asks its polish beside of the child the
+    first solve forked (optdesign.kept_children: it holds the count's NLP), which forks
+    nothing more and gives the records the one-worker solve gives, to the bit."""
+    import multiprocessing
+
+    first, polishes = logged_polishes("housing_disc", 2)
+    children = {c.pid for c in multiprocessing.active_children()}
+    again, polished_again = logged_polishes("housing_disc", 2)
+    one, _ = logged_polishes("housing_disc", 1)
+    assert len(children) == 1 and {c.pid for c in multiprocessing.active_children()} == children
+    assert "beside" in {p[0] for p in polished_again}
+    assert _records(first) == _records(again) == _records(one)
+    assert answer(first) == answer(again) == answer(one)

@@ -1,0 +1,125 @@
+"""Children forked once and kept (optdesign.kept_children): a value asked with what a child
+holds is computed by that child, without a fork; one asked with more is computed by a child
+forked for it, which holds what this process held; an error, a lost child, a cancelled value
+and the process's exit behave as with a child forked for each value."""
+import multiprocessing
+import os
+import subprocess
+import sys
+import time
+
+import pytest
+
+from optdesign import kept_children
+from optdesign.evaluation import figures
+
+
+def _square(x):
+    return x * x, os.getpid()
+
+
+def _fails(x):
+    raise ValueError(f"no square of {x}")
+
+
+def _dies(parent: int):
+    if os.getpid() != parent:
+        os.kill(os.getpid(), signal_kill())
+    return "computed here"
+
+
+def signal_kill():
+    import signal
+    return signal.SIGKILL
+
+
+def _memory_after(generation):
+    """The kept child's memory of evaluations after following ``generation``."""
+    figures.follow(generation)
+    return len(figures._EVALUATED), figures.generation()
+
+
+def test_a_value_asked_with_what_a_child_holds_is_computed_by_it_without_a_fork():
+    first, child = kept_children.beside(_square, 3, needs={"a"})()
+    again, same = kept_children.beside(_square, 4, needs={"a"})()
+    inherited, also = kept_children.beside(_square, 5, needs={"b"}, inherits=lambda: {"b"})()
+    assert (first, again, inherited) == (9, 16, 25)
+    assert child != os.getpid() and same == child
+    # "b": not held by the first child, but by one forked now (it inherits what this
+    # process holds); with one core beside this process's, the first is let go for it
+    assert also != child
+    if kept_children.most_kept() == 1:
+        assert [c.pid for c in multiprocessing.active_children()] == [also]
+
+
+def test_a_value_asked_with_more_than_any_child_holds_is_computed_by_a_new_child():
+    _, child = kept_children.beside(_square, 3, needs={"a"})()
+    _, other = kept_children.beside(_square, 3, needs={"a", "c"})()
+    _, third = kept_children.beside(_square, 3, needs={"a", "c"})()
+    assert other != child and third == other      # the new child holds "a" and "c" since
+
+
+def test_the_childs_error_is_raised_here_and_the_child_serves_on():
+    with pytest.raises(ValueError, match="no square of 3"):
+        kept_children.beside(_fails, 3)()
+    _, child = kept_children.beside(_square, 2)()
+    _, same = kept_children.beside(_square, 2)()
+    assert same == child != os.getpid()
+
+
+def test_a_lost_child_is_computed_here_and_let_go():
+    assert kept_children.beside(_dies, os.getpid())() == "computed here"
+    _, child = kept_children.beside(_square, 2)()
+    assert child != os.getpid() and multiprocessing.active_children()[0].pid == child
+
+
+def test_a_cancelled_value_ends_its_child():
+    pending = kept_children.beside(time.sleep, 60)
+    assert not pending.ready()
+    t0 = time.perf_counter()
+    pending.cancel()
+    assert time.perf_counter() - t0 < 5 and multiprocessing.active_children() == []
+    with pytest.raises(RuntimeError, match="after its child ended"):
+        pending()
+
+
+def test_two_values_at_once_are_two_childrens_or_one_forked_for_it():
+    first = kept_children.beside(_square, 2)
+    second = kept_children.beside(_square, 3)       # the kept one is busy
+    (a, pa), (b, pb) = first(), second()
+    assert (a, b) == (4, 9) and os.getpid() not in (pa, pb) and pa != pb
+
+
+def test_a_child_empties_its_memory_of_evaluations_where_this_process_emptied_its_own():
+    from optdesign.evaluation.design import Design
+    from tests.conftest import PAPER
+
+    figures.evaluate(Design("fourbar_converter", dict(PAPER)), "forward", 97.0, (1.0,))
+    held, generation = kept_children.beside(_memory_after, figures.generation())()
+    assert held > 0 and generation == figures.generation()      # inherited, kept
+    figures.forget()
+    held, generation = kept_children.beside(_memory_after, figures.generation())()
+    assert held == 0 and generation == figures.generation()
+
+
+def test_a_process_with_a_kept_child_exits_at_once_and_leaves_none(tmp_path):
+    script = ("import os, sys\nfrom optdesign import kept_children\n"
+              "print(kept_children.beside(os.getpid)())\n")
+    t0 = time.perf_counter()
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=60, cwd=os.path.dirname(os.path.dirname(__file__)))
+    assert done.returncode == 0 and time.perf_counter() - t0 < 30
+    child = int(done.stdout)
+    for _ in range(100):
+        if not os.path.exists(f"/proc/{child}") or _zombie(child):
+            break
+        time.sleep(0.05)
+    assert not os.path.exists(f"/proc/{child}") or _zombie(child)
+
+
+def _zombie(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().split(")")[-1].split()[0] == "Z"
+    except OSError:
+        return True

@@ -78,3 +78,45 @@ def test_a_pipe_is_refused_without_waiting_for_a_writer(tmp_path, caplog):
 def test_a_missing_file_is_refused(tmp_path):
     assert user_cache.trusted(tmp_path / "none", TAG, DIGEST) is None
     assert not user_cache.intact(tmp_path / "none", TAG, DIGEST)
+
+
+def test_a_file_checked_once_is_not_checked_again_until_it_changes(sealed, monkeypatch):
+    """A check that passed leaves a note of the file's version beside it; a later check of
+    the same version reads no checksum, and any change to the file (a bit flipped in place
+    with its modification time put back, the file replaced by a copy) is checked again."""
+    path, body = sealed
+    note = path.with_name(path.name + user_cache.CHECKED)
+    assert user_cache.intact(path, TAG, DIGEST) and note.is_file()
+    sums = []
+    trailer = user_cache.trailer
+    monkeypatch.setattr(user_cache, "trailer", lambda *a: sums.append(1) or trailer(*a))
+    assert user_cache.intact(path, TAG, DIGEST) and sums == []         # the note read
+    assert not user_cache.intact(path, TAG, "e" * 64)                   # not what it names
+    st = path.stat()
+    with open(path, "r+b") as f:                                        # one bit, in place
+        f.seek(len(body) // 3)
+        byte = f.read(1)
+        f.seek(len(body) // 3)
+        f.write(bytes([byte[0] ^ 1]))
+    os.utime(path, ns=(st.st_atime_ns, st.st_mtime_ns))
+    assert path.stat().st_mtime_ns == st.st_mtime_ns
+    assert not user_cache.intact(path, TAG, DIGEST) and sums
+    user_cache.keep(path, TAG, DIGEST, body)                            # replaced whole
+    assert user_cache.intact(path, TAG, DIGEST)
+
+
+def test_a_note_others_may_write_or_a_link_is_not_read(sealed, tmp_path):
+    path, _ = sealed
+    note = path.with_name(path.name + user_cache.CHECKED)
+    assert user_cache.intact(path, TAG, DIGEST)
+    text = note.read_text()
+    os.chmod(note, 0o666)
+    assert user_cache._read_note(path) is None
+    note.unlink()
+    (tmp_path / "elsewhere").write_text(text)
+    note.symlink_to(tmp_path / "elsewhere")
+    assert user_cache._read_note(path) is None
+    assert user_cache.intact(path, TAG, DIGEST)       # checked again, its bytes read
+    # the note written anew in the link's place: the link's target is left as it was
+    assert not note.is_symlink() and note.read_text() == text
+    assert (tmp_path / "elsewhere").read_text() == text

@@ -18,7 +18,8 @@ compiled: its function runs as it does without a compiler):
   lives in the user's cache folder (:mod:`optdesign.numerics.user_cache`:
   ``$XDG_CACHE_HOME/optdesign``, else ``~/.cache/optdesign``, mode 0700);
 * a library is loaded only when the file is the user's own, not writable by group or others,
-  and ends in a trailer with its digest and the checksum of the bytes before it: a corrupt,
+  and ends in a trailer with its digest and the checksum of the bytes before it (read once
+  per version of the file, :func:`~optdesign.numerics.user_cache.intact`): a corrupt,
   foreign or stale file is ignored (and built anew), never mapped;
 * a process that finds none goes on without it and starts the build beside (:func:`start`):
   a detached, niced process, one per digest (a lock file) and one at a time per kind and

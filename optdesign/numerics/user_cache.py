@@ -6,7 +6,8 @@ is kept in ``$XDG_CACHE_HOME/optdesign`` (else ``~/.cache/optdesign``), mode 070
 there is read only when it is a regular file of this user's, not writable by group or others,
 and ends in a trailer with a tag, the digest of what it was made from and the checksum of the
 bytes before it: a corrupt, foreign or stale file is ignored (and made anew), never loaded.
-Files are written atomically.
+A library's checksum is read once per version of the file (:func:`intact`: a note of the
+version checked beside it). Files are written atomically.
 
 ``OPTDESIGN_COMPILE``: ``on`` (the default), ``load`` (read what is cached, start no
 compiler: the test suite), ``off`` (nothing is read from the folder or written to it).
@@ -105,51 +106,111 @@ def trusted(path: Path, tag: str, digest: str) -> bytes | None:
 
 def intact(path: Path, tag: str, digest: str) -> bool:
     """Whether ``path`` is to be trusted (:func:`trusted`), its bytes checked where they lie
-    (mapped, not read into memory: a compiled library is megabytes)."""
-    with _sealed(path, tag, digest) as body:
-        return body is not None
+    (mapped, not read into memory: a compiled library is megabytes). The checksum is read
+    once per version of the file: a check that passes leaves a note beside it
+    (:func:`_checked_note`: its device, inode, size, modification and change times), and a
+    file that still has the very same ones is the file checked (any write to it, a copy or a
+    rename over it changes one, and no user can set a change time back). That spares every
+    later process the checksum of a library (megabytes for an NLP's)."""
+    with _opened(path) as opened:
+        if opened is None:
+            return False
+        if _read_note(path) == _checked_note(opened[1], tag, digest):
+            return True
+    checked: list = []
+    with _sealed(path, tag, digest, checked) as body:
+        if body is None:
+            return False
+    try:
+        write(_note_path(path), _checked_note(checked[0], tag, digest).encode())
+    except OSError as exc:
+        log.debug("%s: no note of its check (%s)", path.name, exc)
+    return True
+
+
+#: the suffix of the note a check that passed leaves beside a file (:func:`intact`)
+CHECKED = ".checked"
+
+
+def _note_path(path: Path) -> Path:
+    return path.with_name(path.name + CHECKED)
+
+
+def _checked_note(st: os.stat_result, tag: str, digest: str) -> str:
+    """What names the version of a file whose check passed: its tag and digest, and its
+    device, inode, size, modification and change times."""
+    return (f"{tag} {digest} {st.st_dev} {st.st_ino} {st.st_size} {st.st_mtime_ns} "
+            f"{st.st_ctime_ns}\n")
+
+
+def _read_note(path: Path) -> str | None:
+    """The note beside ``path`` (:func:`intact`), where it is one to trust (a regular file
+    of this user's that others may not write, not a link)."""
+    with _opened(_note_path(path), quiet=True) as opened:
+        if opened is None or opened[1].st_size > 1024:
+            return None
+        try:
+            return os.read(opened[0], 1024).decode()
+        except (OSError, UnicodeDecodeError):
+            return None
 
 
 @contextmanager
-def _sealed(path: Path, tag: str, digest: str):
-    """Inside, a view of the bytes of ``path`` before its trailer (the file mapped, read
-    only), or None where it is not to be trusted (:func:`trusted`). Opened without following
-    a link or waiting on a pipe, then asked what it is: the file checked is the file read.
-    (A file cut short in place while it is mapped would fault the process, as would the
-    library CasADi maps after the check: the cache's files are only ever replaced whole,
-    by a rename, which leaves a mapped file as it was.)"""
+def _opened(path: Path, quiet: bool = False):
+    """Inside, (descriptor, status) of the file ``path``, opened read-only without following
+    a link or waiting on a pipe, then asked what it is (the file checked is the file read);
+    None where it is missing or not to be trusted: not a regular file of this user's, or one
+    others may write (``quiet``: said in no debug line)."""
+    say = (lambda *args: None) if quiet else log.debug
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
     except FileNotFoundError:
         yield None
         return
     except OSError as exc:          # a link (ELOOP), or a file this user may not read
-        log.debug("%s is %s: ignored", path, "a link" if os.path.islink(path)
-                  else f"not to be opened ({exc.strerror})")
+        say("%s is %s: ignored", path, "a link" if os.path.islink(path)
+            else f"not to be opened ({exc.strerror})")
         yield None
         return
     try:
         st = os.fstat(fd)
         if not stat.S_ISREG(st.st_mode):
-            log.debug("%s is not a regular file: ignored", path)
+            say("%s is not a regular file: ignored", path)
+            yield None
+        elif st.st_uid != os.getuid() or st.st_mode & 0o022:
+            say("%s is not this user's own or others may write it: ignored", path)
+            yield None
+        else:
+            yield fd, st
+    finally:
+        os.close(fd)
+
+
+@contextmanager
+def _sealed(path: Path, tag: str, digest: str, checked: list | None = None):
+    """Inside, a view of the bytes of ``path`` before its trailer (the file mapped, read
+    only), or None where it is not to be trusted (:func:`trusted`); the status of the file
+    checked appended to ``checked``, where given. (A file cut short in place while it is
+    mapped would fault the process, as would the library CasADi maps after the check: the
+    cache's files are only ever replaced whole, by a rename, which leaves a mapped file as
+    it was.)"""
+    with _opened(path) as opened:
+        if opened is None:
             yield None
             return
-        if st.st_uid != os.getuid() or st.st_mode & 0o022:
-            log.debug("%s is not this user's own or others may write it: ignored", path)
-            yield None
-            return
+        fd, st = opened
         size = trailer_bytes(tag)
         if st.st_size > size:
             with mmap.mmap(fd, 0, access=mmap.ACCESS_READ) as mapped, \
                     memoryview(mapped) as whole, whole[:-size] as body, \
                     whole[-size:] as end:
                 if end == trailer(tag, digest, body):
+                    if checked is not None:
+                        checked.append(st)
                     yield body
                     return
         log.debug("%s is corrupt or was made from something else: ignored", path)
         yield None
-    finally:
-        os.close(fd)
 
 
 def write(path: Path, data: bytes, keep: bool = False) -> Path:

@@ -13,8 +13,9 @@ minutes per NLP, so it happens once, and never while a command waits:
   else ``~/.cache/optdesign``, mode 0700);
 * a solve that finds its library loads it (a millisecond or two) when the file is the user's
   own, not writable by group or others, and ends in a trailer with the NLP's digest and the
-  checksum of the bytes before it: a corrupt, foreign or stale file is ignored (and built
-  anew), never mapped;
+  checksum of the bytes before it (read once per version of the file,
+  :func:`optdesign.numerics.user_cache.intact`): a corrupt, foreign or stale file is ignored
+  (and built anew), never mapped;
 * a solve that finds none runs on the virtual machine, as without a compiler, and starts the
   build beside it: a detached, niced process, one per digest (a lock file) and one NLP at a
   time per cache folder; the next solve of the same NLP loads the library. A build that fails

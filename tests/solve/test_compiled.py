@@ -14,6 +14,8 @@ import time
 import casadi as ca
 import pytest
 
+from optdesign.numerics import user_cache
+
 from optdesign.commands.warmup import recipes_of
 from optdesign.numerics import c_library
 from optdesign.problem.loader import problem_from_dict
@@ -41,10 +43,12 @@ def recipe_of(problem) -> compiled.Recipe:
 def nlp_files(where) -> list[str]:
     """The names of the NLPs' files in the cache folder (the lanes' code, compiled and not,
     the kinematics' stages and the Sobol samples kept beside them, numerics/lanes.py,
-    numerics/native_lanes.py, numerics/angle_lanes.py and numerics/sobol.py, aside)."""
+    numerics/native_lanes.py, numerics/angle_lanes.py and numerics/sobol.py, aside, and the
+    notes of the checks that passed, numerics/user_cache.py)."""
     return sorted(p.name for p in where.iterdir()
                   if not p.name.startswith(("lanes-", "sobol-", "native-lanes-",
-                                            "angle-stages-")))
+                                            "angle-stages-"))
+                  and not p.name.endswith(user_cache.CHECKED))
 
 
 def wait_for_build(where, name, timeout=300.0) -> None:

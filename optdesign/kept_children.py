@@ -67,19 +67,22 @@ _children: list[_Child] = []
 _lock = threading.Lock()
 
 
-def beside(fn, *args, needs=frozenset(), inherits=frozenset) -> "Kept":
+def beside(fn, *args, needs=frozenset(), inherits=frozenset, fork: bool = True):
     """``fn(*args)`` computed in a kept child (see the module's text) and a :class:`Kept`
     that waits for its value when called: an idle child of this thread that holds
     ``needs`` (a set of hashable names), else one forked now, which holds ``inherits()``
     (what this process holds as it forks) and ``needs`` afterwards. Where no child can be
     kept (the cap reached, every child busy; no ``fork``), :func:`optdesign.lifetime.beside`'s
-    child computes it."""
+    child computes it. Without ``fork``: None where no idle child holds ``needs`` (the
+    caller computes the value itself)."""
     needs = frozenset(needs)
     me = threading.get_ident()
     with _lock:
         _children[:] = [c for c in _children if c.busy or c.process.is_alive()]
         mine = [c for c in _children if not c.busy and c.thread == me]
         child = next((c for c in mine if needs <= c.holds), None)
+        if child is None and not fork:
+            return None
         if child is None:
             if len(_children) >= most_kept() and not mine:
                 return lifetime.beside(fn, *args)
@@ -99,7 +102,7 @@ def beside(fn, *args, needs=frozenset(), inherits=frozenset) -> "Kept":
         child.requests.send((fn, args))
     except Exception:                   # noqa: BLE001 - lost, or arguments that do not pickle
         _let_go(child)
-        return lifetime.beside(fn, *args)
+        return lifetime.beside(fn, *args) if fork else None
     return Kept(fn, args, child, needs)
 
 

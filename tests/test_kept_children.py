@@ -123,3 +123,14 @@ def _zombie(pid: int) -> bool:
             return f.read().split(")")[-1].split()[0] == "Z"
     except OSError:
         return True
+
+
+def test_without_fork_a_value_is_asked_only_of_an_idle_child_that_holds_what_it_needs():
+    assert kept_children.beside(_square, 2, needs={"x"}, fork=False) is None
+    _, child = kept_children.beside(_square, 2, needs={"x"})()
+    pending = kept_children.beside(_square, 3, needs={"x"}, fork=False)
+    assert pending is not None and pending() == (9, child)
+    busy = kept_children.beside(time.sleep, 0.2, needs={"x"})
+    assert kept_children.beside(_square, 3, needs={"x"}, fork=False) is None   # busy
+    busy()
+    assert kept_children.beside(_square, 3, needs={"y"}, fork=False) is None

@@ -440,6 +440,19 @@ def _angle_slopes(design: Design, x, chains: dict[tuple, int], points: _Points, 
     return out
 
 
+#: (mechanism, count, options) of every sensitivity record made in this process: its
+#: chains' gradient functions built (:func:`made_before`)
+_MADE: set = set()
+
+
+def made_before(problem, count: int) -> bool:
+    """Whether this process made a sensitivity record of ``problem``'s mechanism at ``count``
+    phases before (its chains' gradient functions, most of a first record's time, built)."""
+    model = problem.model
+    options = tuple(sorted((model.default_options() | dict(problem.options)).items()))
+    return (problem.mechanism, int(count), options) in _MADE
+
+
 def sensitivity_record(problem, values: Mapping[str, float],
                        evaluation: Evaluation | None = None) -> dict:
     """:func:`sensitivities` as the block a result carries (``Sensitivities.to_dict``). A
@@ -447,7 +460,11 @@ def sensitivity_record(problem, values: Mapping[str, float],
     output at rest over the whole turn), the block says why, ``{"unavailable": reason}``,
     rather than fail the solve."""
     try:
-        return sensitivities(problem, values, evaluation).to_dict()
+        record = sensitivities(problem, values, evaluation).to_dict()
+        design = values if isinstance(values, Design) else \
+            Design.from_problem(problem, dict(values))
+        _MADE.add((design.mechanism, design.count, design.option_key))
+        return record
     except (ArithmeticError, ValueError, RuntimeError) as exc:
         return {"unavailable": f"{type(exc).__name__}: {exc}"}
 

@@ -17,7 +17,7 @@ import numpy as np
 
 from optdesign.errors import AssemblyError, ProblemError
 from optdesign.evaluation.regulation import quantities_over_range
-from optdesign.evaluation.sensitivity import sensitivity_record
+from optdesign.evaluation.sensitivity import made_before, sensitivity_record
 from optdesign.numerics import lanes
 from optdesign.quantities import design_quantities, unit_text
 from optdesign.quantities.bounds import side_key
@@ -27,7 +27,7 @@ from optdesign.solver import count_order
 from optdesign.solver.accuracy import solve_accuracy
 from optdesign.solver.nlp import is_robust
 from optdesign.solver.phase_solver import AS_IT_IS, Outcome, PhaseSolver, Timings
-from optdesign.solver.polishing import Polishing
+from optdesign.solver.polishing import Polishing, answer_record_beside
 from optdesign.solver.reachable import reach_of
 from optdesign.solver.refine import refine
 from optdesign.solver.result import PhaseResult, SolveResult
@@ -134,7 +134,8 @@ def solve_phase(problem, count: int, solver: PhaseSolver | None = None,
         work = _from_nominal_optima(problem, count, solver, work, screening.seeds)
     result.timings = solver.timings.to_dict()
     if work.best is not None:
-        return _fill(result, problem, work.best, sensitivities)
+        return _fill(result, problem, work.best, sensitivities,
+                     quantities_made=work.quantities_made is work.best)
     if not screening.seeds:
         result.status, result.binding = "infeasible", "assembly"
         result.message = (f"no design within the bounds assembles at every listed "
@@ -365,8 +366,8 @@ def _fixed_infeasible(problem, count: int) -> PhaseResult | None:
                                + (f" ({ver.message})" if ver.message else ""))
 
 
-def _fill(result: PhaseResult, problem, outcome: Outcome,
-          sensitivities: bool = False) -> PhaseResult:
+def _fill(result: PhaseResult, problem, outcome: Outcome, sensitivities: bool = False,
+          quantities_made: bool = False) -> PhaseResult:
     ver, values = outcome.verification, outcome.values
     design = {k: float(values[k]) for k in problem.model.lengths}
     design[problem.model.count_variable] = result.count
@@ -387,10 +388,24 @@ def _fill(result: PhaseResult, problem, outcome: Outcome,
         result.worst_case_min_transmission_angle_deg = angle.value
         result.worst_case_quantities = {case.quantity: case.value for case in bounded}
     result.active = outcome.record.active
-    if sensitivities:           # on the evaluation at hand
-        result.sensitivities = sensitivity_record(problem, design, ver.evaluation)
-    result.quantities = design_quantities(problem, _every_quantity_searched(problem,
-                                                                            ver.evaluation))
+    # the sensitivities on the evaluation at hand: where this process has not made one at the
+    # count (its chains' gradient functions to build) and has the quantities to find still
+    # (no wait for a polish beside made them ahead), by the child the polishes beside ran in,
+    # where it is idle, while this process finds them (the same values)
+    pending = answer_record_beside(problem, result.count, sensitivity_record, problem, design,
+                                   ver.evaluation) \
+        if sensitivities and not quantities_made and not made_before(problem, result.count) \
+        else None
+    try:
+        result.quantities = design_quantities(
+            problem, _every_quantity_searched(problem, ver.evaluation))
+        if sensitivities:
+            result.sensitivities = pending() if pending is not None else \
+                sensitivity_record(problem, design, ver.evaluation)
+    except BaseException:
+        if pending is not None:
+            pending.cancel()
+        raise
     result.message = ""
     return result
 

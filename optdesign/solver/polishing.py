@@ -53,6 +53,8 @@ class Polishing:
         #: quantities; refined for the accuracy record, should it be the solve's answer:
         #: :func:`~optdesign.solver.accuracy.solve_accuracy`), not a nominal problem's
         self.records_later = False
+        #: the optimum whose quantities a wait made ahead, if any (:meth:`_quantities_ahead`)
+        self.quantities_made: Outcome | None = None
         #: the line screening through the last design it was asked for (:meth:`_lines_through`)
         self._lines: LineScreening | None = None
 
@@ -250,7 +252,7 @@ class Polishing:
             design = Design.from_problem(self.problem, self.best.values)
             for e in eccentricities_of(self.problem):
                 yield partial(self._refined, design, e)
-            yield partial(design_quantities, self.problem, self.best.verification.evaluation)
+            yield partial(self._quantities_ahead, self.best)
 
     def _lines_through(self, values: dict) -> LineScreening:
         """The :class:`~optdesign.solver.screening.LineScreening` through ``values``, made once
@@ -269,6 +271,12 @@ class Polishing:
         screened now."""
         with self.solver.timings.stage("screening"):
             return self._lines_through(values).seeds()
+
+    def _quantities_ahead(self, best: Outcome) -> None:
+        """``best``'s quantities, made ahead (:func:`design_quantities` keeps the maxima they
+        read); :attr:`quantities_made` names the optimum whose they are."""
+        design_quantities(self.problem, best.verification.evaluation)
+        self.quantities_made = best
 
     def _refined(self, design, e: float) -> None:
         """``design``'s figures at ``e`` on the accuracy record's finer grid, made ahead
@@ -405,6 +413,23 @@ def _beside(problem, count: int, held: tuple, checks_in_parallel: bool, values: 
                                 values, avoid, secondary, tuple(checks), generation(),
                                 needs={(key, slots) for slots in (*held, curves)},
                                 inherits=built.held)
+
+
+def answer_record_beside(problem, count: int, fn, *args):
+    """``fn(*args)`` (a record of the answer, computed from data alone) begun in a kept
+    child that holds the count's NLP and is idle (:func:`optdesign.kept_children.beside`:
+    the one its polishes beside ran in, which holds the count's functions built), for this
+    process to make the rest meanwhile; None where there is none (the caller computes it)."""
+    key = built.key_of(problem, count)
+    curves = count * len(STROKE_SIGNS[problem.stroke])
+    return kept_children.beside(_record_of, generation(), fn, args, needs={(key, curves)},
+                                fork=False)
+
+
+def _record_of(forgotten: tuple, fn, args):
+    follow(forgotten)
+    with lanes.threads(1):                  # the other core is the asking process's
+        return fn(*args)
 
 
 def _polish_of(problem, count: int, held: tuple, checks_in_parallel: bool, values: dict,

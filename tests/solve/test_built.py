@@ -303,7 +303,7 @@ def test_a_wait_for_a_polish_beside_makes_what_the_solve_asks_for_later(
     monkeypatch.setattr(figures, "exact_figures", refined)
     figures.forget()
     two, _ = logged_polishes("housing_disc", 2)
-    assert {"_line_step", "_refined", "design_quantities"} <= set(made)
+    assert {"_line_step", "_refined", "_quantities_ahead"} <= set(made)
     made_ahead, calls = calls, []
     figures.forget()
     one, _ = logged_polishes("housing_disc", 1)
@@ -359,3 +359,38 @@ def test_a_second_solve_polishes_beside_in_the_kept_child_and_answers_the_same(
     assert "beside" in {p[0] for p in polished_again}
     assert _records(first) == _records(again) == _records(one)
     assert answer(first) == answer(again) == answer(one)
+
+
+def test_the_answers_sensitivities_are_made_beside_while_its_quantities_are_found_here(
+        fresh, monkeypatch, tmp_path):
+    """A count solved alone: its answer's sensitivity record, the first this process makes
+    at the count, is made by the kept child its polish beside ran in, while this process
+    finds the answer's quantities (here no wait for a polish beside made them ahead): the
+    record of the one-worker solve, which makes it here, to the bit."""
+    import os
+
+    from optdesign import kept_children
+    from optdesign.evaluation import sensitivity
+
+    log = tmp_path / "sensitivities"
+    real = sensitivity.sensitivities
+
+    def logged(*args, **kwargs):
+        with open(log, "a") as f:               # from the kept child as well
+            f.write(f"{os.getpid()}\n")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(sensitivity, "sensitivities", logged)
+    monkeypatch.setattr(sensitivity, "_MADE", set())
+    monkeypatch.setattr(kept_children.Kept, "ready", lambda self: True)   # no wait makes any
+    data = file_data(ROOT / "problems" / "sharkov2022_disc.yaml")
+    data.setdefault("solver", {})["workers"] = 2
+    two = solve(problem_from_dict(data))
+    made_by = log.read_text().split()
+    log.unlink()
+    data["solver"]["workers"] = 1
+    one = solve(problem_from_dict(data))
+    assert len(made_by) == 1 and made_by[0] != str(os.getpid())
+    assert log.read_text().split() == [str(os.getpid())]
+    assert two.per_phase[0].sensitivities == one.per_phase[0].sensitivities
+    assert two.per_phase[0].sensitivities["d_delta_d_length_per_mm"]

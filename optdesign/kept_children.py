@@ -64,7 +64,9 @@ class _Child:
 
 
 _children: list[_Child] = []
-_lock = threading.Lock()
+#: re-entrant: a value never asked for ends its child as it is collected
+#: (:meth:`Kept.__del__`), which may happen inside this module's own locked blocks
+_lock = threading.RLock()
 
 
 def beside(fn, *args, needs=frozenset(), inherits=frozenset, fork: bool = True):
@@ -78,7 +80,9 @@ def beside(fn, *args, needs=frozenset(), inherits=frozenset, fork: bool = True):
     needs = frozenset(needs)
     me = threading.get_ident()
     with _lock:
-        _children[:] = [c for c in _children if c.busy or c.process.is_alive()]
+        for gone in [c for c in _children if not c.busy and not c.process.is_alive()]:
+            _children.remove(gone)          # (died idle: killed from outside)
+            gone.end()
         mine = [c for c in _children if not c.busy and c.thread == me]
         child = next((c for c in mine if needs <= c.holds), None)
         if child is None and not fork:
@@ -159,7 +163,7 @@ def _serve(requests_in, requests_out, answers_in, answers_out, parent_pid: int) 
 def _reset_in_child() -> None:
     """A forked process keeps none of its parent's children (nor its lock's state)."""
     global _lock
-    _lock = threading.Lock()
+    _lock = threading.RLock()
     for child in _children:         # their pipes' ends, inherited: closed here alone
         for end in (child.requests, child.answers):
             try:

@@ -134,3 +134,15 @@ def test_without_fork_a_value_is_asked_only_of_an_idle_child_that_holds_what_it_
     assert kept_children.beside(_square, 3, needs={"x"}, fork=False) is None   # busy
     busy()
     assert kept_children.beside(_square, 3, needs={"y"}, fork=False) is None
+
+
+def test_a_kept_child_killed_while_idle_is_let_go_and_another_serves():
+    _, child = kept_children.beside(_square, 2)()
+    os.kill(child, signal_kill())
+    for _ in range(200):
+        if _zombie(child) or not os.path.exists(f"/proc/{child}"):
+            break
+        time.sleep(0.01)
+    value, other = kept_children.beside(_square, 5)()
+    assert value == 25 and other not in (child, os.getpid())
+    assert [c.pid for c in multiprocessing.active_children()] == [other]

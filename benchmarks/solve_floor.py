@@ -161,11 +161,16 @@ def child(case: str, repeats: int) -> dict:
 def reaped(most_s: float = 10.0) -> None:
     """Wait (up to ``most_s``) for the processes a solve forked beside itself to end, so that
     their CPU seconds count in this process's children's (``resource.RUSAGE_CHILDREN``): a
-    solve does not wait for a process that has sent its answer as it exits."""
+    solve does not wait for a process that has sent its answer as it exits. A child kept
+    for the next solve's polishes (optdesign/kept_children.py) is not waited for: its CPU
+    seconds are read where it runs (``cpu_seconds``)."""
     import multiprocessing
 
+    from optdesign import kept_children
+
     end = time.perf_counter() + most_s
-    while multiprocessing.active_children() and time.perf_counter() < end:
+    while time.perf_counter() < end and any(
+            p.pid not in kept_children.pids() for p in multiprocessing.active_children()):
         time.sleep(0.001)
 
 

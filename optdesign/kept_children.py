@@ -110,6 +110,12 @@ def beside(fn, *args, needs=frozenset(), inherits=frozenset, fork: bool = True):
     return Kept(fn, args, child, needs)
 
 
+def pids() -> frozenset:
+    """The process ids of the children kept now (a benchmark waits for every other child)."""
+    with _lock:
+        return frozenset(c.process.pid for c in _children)
+
+
 def end_all() -> None:
     """Let every kept child go (a new problem's NLPs will not be theirs; tests)."""
     with _lock:

@@ -131,7 +131,9 @@ def _forked(holds: frozenset) -> _Child | None:
         ctx = mp.get_context("fork")
         requests_in, requests_out = ctx.Pipe(duplex=False)
         answers_in, answers_out = ctx.Pipe(duplex=False)
-        process = ctx.Process(target=_serve, daemon=False,
+        # daemonic: a process of multiprocessing's own that exits ends it, where it would
+        # wait for a child of another kind to end (which waits for its next value)
+        process = ctx.Process(target=_serve, daemon=True,
                               args=(requests_in, requests_out, answers_in, answers_out,
                                     os.getpid()))
         with lifetime.signals_held():

@@ -146,3 +146,19 @@ def test_a_kept_child_killed_while_idle_is_let_go_and_another_serves():
     value, other = kept_children.beside(_square, 5)()
     assert value == 25 and other not in (child, os.getpid())
     assert [c.pid for c in multiprocessing.active_children()] == [other]
+
+
+def _keeps_a_child_and_returns(out):
+    out.send(kept_children.beside(_square, 3)())
+
+
+def test_a_multiprocessing_child_with_a_kept_child_of_its_own_exits_at_once():
+    """multiprocessing waits, as one of its processes exits, for its children that are not
+    daemonic: a kept child (which waits for its next value) is daemonic, ended there."""
+    ctx = multiprocessing.get_context("fork")
+    receive, send = ctx.Pipe(duplex=False)
+    process = ctx.Process(target=_keeps_a_child_and_returns, args=(send,))
+    process.start()
+    (value, grandchild) = receive.recv()
+    process.join(30)
+    assert value == 9 and grandchild != process.pid and process.exitcode == 0

@@ -399,9 +399,13 @@ def _fill(result: PhaseResult, problem, outcome: Outcome, sensitivities: bool = 
     try:
         result.quantities = design_quantities(
             problem, _every_quantity_searched(problem, ver.evaluation))
-        if sensitivities:
-            result.sensitivities = pending() if pending is not None else \
-                sensitivity_record(problem, design, ver.evaluation)
+        if pending is not None:
+            try:
+                result.sensitivities = pending()
+            except Exception:       # noqa: BLE001 - not made there: made here (its error too)
+                pending = None
+        if sensitivities and pending is None:
+            result.sensitivities = sensitivity_record(problem, design, ver.evaluation)
     except BaseException:
         if pending is not None:
             pending.cancel()

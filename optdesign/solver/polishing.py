@@ -2,8 +2,9 @@
 the next while they can bring a better optimum (:meth:`Polishing.basins`).
 
 The best basins are polished as if at once, so the answer does not depend on the worker
-count; with two cores the first is polished here and the next in a process forked beside it,
-and each later basin is begun beside the one before it (:mod:`optdesign.lifetime`). Each
+count; with two cores the first is polished here and the next in a process beside it (a
+child kept for the polishes beside, which holds their NLPs, else one forked for it:
+:mod:`optdesign.kept_children`), and each later basin is begun beside the one before it. Each
 polish is a :class:`~optdesign.solver.phase_solver.PhaseSolver`'s; the distinct optima it
 finds, the best of them and every polish's record are this module's.
 """
@@ -389,10 +390,10 @@ def _of_its_own(problem, count: int, checks_in_parallel: bool) -> "PhaseSolver":
 def _head_beside(problem, count: int, starts: list[dict], checks_in_parallel: bool = False,
                  checks: list[dict] = (), secondary=None) -> list:
     """:func:`_polish_beside` of each of ``starts`` (``secondary``: whether each has the
-    secondary budget; each has by default), each begun in a process forked now
-    (:func:`optdesign.lifetime.beside`, :func:`_polish_here`): called, each waits for its
-    outcome and stage times (computed here if its process is lost). The same polish as in
-    this process, on the same memory: the outcome is the same to the bit. The first also
+    secondary budget; each has by default), each begun in a process beside this one
+    (:func:`_beside`, :func:`_polish_here`): called, each waits for its outcome and stage
+    times (computed here if its process is lost). The same polish as in this process, on
+    the same NLPs: the outcome is the same to the bit. The first also
     checks ``checks`` as they are, once its polish is done."""
     secondary = [True] * len(starts) if secondary is None else secondary
     return [_beside(problem, count, (), checks_in_parallel, values, [], secondary[k],

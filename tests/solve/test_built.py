@@ -394,3 +394,27 @@ def test_the_answers_sensitivities_are_made_beside_while_its_quantities_are_foun
     assert log.read_text().split() == [str(os.getpid())]
     assert two.per_phase[0].sensitivities == one.per_phase[0].sensitivities
     assert two.per_phase[0].sensitivities["d_delta_d_length_per_mm"]
+
+
+def test_a_sensitivity_record_not_made_beside_is_made_here(fresh, monkeypatch):
+    """Where the child's answer is an error (a record that did not come back), the solving
+    process makes the record itself: the one-worker solve's."""
+    from optdesign.evaluation import sensitivity
+    from optdesign.solver import driver
+
+    class Failed:
+        def __call__(self):
+            raise RuntimeError("no value from a kept child")
+
+        def cancel(self):
+            pass
+
+    monkeypatch.setattr(sensitivity, "_MADE", set())
+    monkeypatch.setattr(driver, "answer_record_beside", lambda *args: Failed())
+    data = file_data(ROOT / "problems" / "sharkov2022_disc.yaml")
+    data.setdefault("solver", {})["workers"] = 2
+    two = solve(problem_from_dict(data))
+    data["solver"]["workers"] = 1
+    one = solve(problem_from_dict(data))
+    assert two.per_phase[0].sensitivities == one.per_phase[0].sensitivities
+    assert two.per_phase[0].sensitivities["d_delta_d_length_per_mm"]

@@ -4,10 +4,9 @@ computed by a child that holds what it needs already, instead of by a child fork
 
 :func:`optdesign.lifetime.beside` forks a child for each value. The fork itself costs a few
 milliseconds, and then both processes pay for every page of memory they shared as they first
-write it: an IPOPT run in the parent right after a fork copies about a thousand pages (its
-arrays, and the Python objects it touches) and takes a fifth longer than alone (the disc
-problem at 6 phases), and the child's likewise. A kept child pays that once, as it is forked
-(``benchmarks/solve_floor.py``: the warm solve).
+write it: an IPOPT run in the parent right after a fork copies a thousand pages or more (its
+arrays, and the Python objects it touches; ``benchmarks/fork_cost.py`` times it alone and
+after a fork), and the child's likewise. A kept child pays that once, as it is forked.
 
 A value is asked of a kept child with what it needs named (:func:`beside`'s ``needs``: the
 NLPs the polish runs on): an idle kept child that holds all of it computes the value, the

@@ -79,9 +79,11 @@ def beside(fn, *args, needs=frozenset(), inherits=frozenset, fork: bool = True):
     needs = frozenset(needs)
     me = threading.get_ident()
     with _lock:
-        for gone in [c for c in _children if not c.busy and not c.process.is_alive()]:
-            _children.remove(gone)          # (died idle: killed from outside)
-            gone.end()
+        threads = {t.ident for t in threading.enumerate()}
+        for gone in [c for c in _children if not c.busy and (
+                not c.process.is_alive() or c.thread not in threads)]:
+            _children.remove(gone)          # died idle (killed from outside), or its thread
+            gone.end()                      # ended (an NLP is its thread's: none to reuse)
         mine = [c for c in _children if not c.busy and c.thread == me]
         child = next((c for c in mine if needs <= c.holds), None)
         if child is None and not fork:

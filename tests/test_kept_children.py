@@ -162,3 +162,20 @@ def test_a_multiprocessing_child_with_a_kept_child_of_its_own_exits_at_once():
     (value, grandchild) = receive.recv()
     process.join(30)
     assert value == 9 and grandchild != process.pid and process.exitcode == 0
+
+
+def test_the_idle_child_of_a_thread_that_ended_is_let_go_for_another_threads():
+    """A kept child serves the thread it was forked for (an NLP is its thread's); once that
+    thread has ended, its idle child is let go and another thread's value gets a child kept
+    for it, not one forked for the value alone."""
+    import threading
+
+    got = []
+    worker = threading.Thread(target=lambda: got.append(kept_children.beside(_square, 2)()))
+    worker.start()
+    worker.join()
+    _, first = got[0]
+    _, here = kept_children.beside(_square, 3)()
+    _, again = kept_children.beside(_square, 4)()
+    assert here != first and again == here
+    assert [c.pid for c in multiprocessing.active_children()] == [here]

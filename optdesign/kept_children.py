@@ -17,10 +17,13 @@ A child holds what it inherited and what it was asked with since. The value is t
 process would compute (the function a pure one of its arguments and of what each process
 builds the same way), as from a child forked for it: only the time differs.
 
-Each kept child dies with this process (:func:`optdesign.lifetime.die_with_parent`), as its
-pipe closes, and when its value is no longer wanted (:meth:`Kept.cancel`: a child left
-computing would hold the next value up). Without ``fork`` the value is
-:func:`optdesign.lifetime.beside`'s.
+A kept child serves the thread it was forked for (an NLP is its thread's:
+:mod:`optdesign.solver.built`). It dies with this process
+(:func:`optdesign.lifetime.die_with_parent`, and daemonic: a process of multiprocessing's own
+that exits ends it), as its pipe closes, when its thread has ended, and when its value is no
+longer wanted (:meth:`Kept.cancel`: a child left computing would hold the next value up).
+Where the platform cannot fork, the value is :func:`optdesign.lifetime.beside`'s (computed
+here).
 """
 from __future__ import annotations
 

@@ -58,6 +58,10 @@ class _Child:
             self.process.join()
         except (OSError, ValueError, AssertionError):
             pass
+        self.close_pipes()
+
+    def close_pipes(self) -> None:
+        """Close this process's ends of the child's pipes."""
         for end in (self.requests, self.answers):
             try:
                 end.close()
@@ -177,11 +181,7 @@ def _reset_in_child() -> None:
     global _lock
     _lock = threading.RLock()
     for child in _children:         # their pipes' ends, inherited: closed here alone
-        for end in (child.requests, child.answers):
-            try:
-                end.close()
-            except OSError:
-                pass
+        child.close_pipes()
     _children.clear()
 
 
@@ -211,13 +211,7 @@ class Kept:
         child = self.child
         if child is None:
             return self.fn(*self.args)
-        try:
-            kind, value = child.answers.recv()
-        except (EOFError, OSError):
-            kind, value = "lost", None
-        except BaseException:               # a Ctrl-C while waiting: the child is ended
-            self.cancel()
-            raise
+        kind, value = lifetime.received(child.answers, self.cancel)
         self.child = None
         if kind == "lost":
             _let_go(child)
@@ -230,19 +224,14 @@ class Kept:
         return value
 
     def ready(self) -> bool:
-        if self.child is None:
-            return True
-        try:
-            return self.child.answers.poll(0)
-        except (EOFError, OSError):
-            return True
+        return self.child is None or lifetime.arrived(self.child.answers)
 
     def cancel(self) -> None:
         """End the child (it may be computing still) and forget the value."""
         if self.child is not None:
             _let_go(self.child)
             self.child = None
-        self.fn = _cancelled
+        self.fn = lifetime.cancelled
 
     def __del__(self):
         if getattr(self, "child", None) is not None:    # never asked: the child computes on
@@ -251,6 +240,3 @@ class Kept:
             except Exception:               # noqa: BLE001 - at interpreter exit
                 pass
 
-
-def _cancelled(*_):
-    raise RuntimeError("a value computed beside was asked for after its child ended")

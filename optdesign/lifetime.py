@@ -290,13 +290,7 @@ class Beside:
     def __call__(self):
         if self.child is None:
             return self.fn(*self.args)
-        try:
-            kind, value = self.receive.recv()
-        except (EOFError, OSError):
-            kind, value = "lost", None
-        except BaseException:               # a Ctrl-C while waiting: the child is ended
-            self.cancel()
-            raise
+        kind, value = received(self.receive, self.cancel)
         self._close(wait=False)
         if kind == "error":
             raise value
@@ -306,12 +300,7 @@ class Beside:
         """Whether the value is in: asked for now, it would not wait for the child (its
         value or error has come, or it has ended; or there is no child, and the value would
         be computed here)."""
-        if self.child is None:
-            return True
-        try:
-            return self.receive.poll(0)
-        except (EOFError, OSError):
-            return True
+        return self.child is None or arrived(self.receive)
 
     def cancel(self) -> None:
         """End the child, if it still runs, and forget its value (asked for after this,
@@ -319,7 +308,7 @@ class Beside:
         if self.child is not None:
             self.child.kill()
             self._close()
-        self.fn = _cancelled
+        self.fn = cancelled
 
     def _close(self, wait: bool = True) -> None:
         """Close the pipe and let the child go; with ``wait``, once it has ended. Without,
@@ -331,7 +320,30 @@ class Beside:
         self.child = None
 
 
-def _cancelled(*_):
+def received(receive, cancel) -> tuple[str, object]:
+    """The answer a child sends on the pipe end ``receive`` (("value", v) or ("error", e)),
+    or ("lost", None) where the child ended without one; a Ctrl-C while waiting calls
+    ``cancel`` (which ends the child) and is raised again (a kept child's value waits the
+    same way: :class:`optdesign.kept_children.Kept`)."""
+    try:
+        return receive.recv()
+    except (EOFError, OSError):
+        return "lost", None
+    except BaseException:
+        cancel()
+        raise
+
+
+def arrived(receive) -> bool:
+    """Whether :func:`received` would not wait: an answer has come, or the child ended."""
+    try:
+        return receive.poll(0)
+    except (EOFError, OSError):
+        return True
+
+
+def cancelled(*_):
+    """A cancelled value's function: asked for, it raises."""
     raise RuntimeError("a value computed beside was asked for after its child ended")
 
 

@@ -4,6 +4,7 @@ forked for it, which holds what this process held; an error, a lost child, a can
 and the process's exit behave as with a child forked for each value."""
 import multiprocessing
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -12,25 +13,7 @@ import pytest
 
 from optdesign import kept_children
 from optdesign.evaluation import figures
-
-
-def _square(x):
-    return x * x, os.getpid()
-
-
-def _fails(x):
-    raise ValueError(f"no square of {x}")
-
-
-def _dies(parent: int):
-    if os.getpid() != parent:
-        os.kill(os.getpid(), signal_kill())
-    return "computed here"
-
-
-def signal_kill():
-    import signal
-    return signal.SIGKILL
+from tests.test_lifetime import _dies_in_a_child, _fails, _square
 
 
 def _memory_after(generation):
@@ -68,7 +51,7 @@ def test_the_childs_error_is_raised_here_and_the_child_serves_on():
 
 
 def test_a_lost_child_is_computed_here_and_let_go():
-    assert kept_children.beside(_dies, os.getpid())() == "computed here"
+    assert kept_children.beside(_dies_in_a_child, os.getpid())() == "computed here"
     _, child = kept_children.beside(_square, 2)()
     assert child != os.getpid() and multiprocessing.active_children()[0].pid == child
 
@@ -138,7 +121,7 @@ def test_without_fork_a_value_is_asked_only_of_an_idle_child_that_holds_what_it_
 
 def test_a_kept_child_killed_while_idle_is_let_go_and_another_serves():
     _, child = kept_children.beside(_square, 2)()
-    os.kill(child, signal_kill())
+    os.kill(child, signal.SIGKILL)
     for _ in range(200):
         if _zombie(child) or not os.path.exists(f"/proc/{child}"):
             break

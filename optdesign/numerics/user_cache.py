@@ -115,14 +115,14 @@ def intact(path: Path, tag: str, digest: str) -> bool:
     with _opened(path) as opened:
         if opened is None:
             return False
-        if _read_note(path) == _checked_note(opened[1], tag, digest):
+        note = _checked_note(opened[1], tag, digest)
+        if _read_note(path) == note:
             return True
-    checked: list = []
-    with _sealed(path, tag, digest, checked) as body:
-        if body is None:
-            return False
+        with _body(*opened, path, tag, digest) as body:
+            if body is None:
+                return False
     try:
-        write(_note_path(path), _checked_note(checked[0], tag, digest).encode())
+        write(_note_path(path), note.encode())
     except OSError as exc:
         log.debug("%s: no note of its check (%s)", path.name, exc)
     return True
@@ -187,30 +187,33 @@ def _opened(path: Path, quiet: bool = False):
 
 
 @contextmanager
-def _sealed(path: Path, tag: str, digest: str, checked: list | None = None):
+def _sealed(path: Path, tag: str, digest: str):
     """Inside, a view of the bytes of ``path`` before its trailer (the file mapped, read
-    only), or None where it is not to be trusted (:func:`trusted`); the status of the file
-    checked appended to ``checked``, where given. (A file cut short in place while it is
-    mapped would fault the process, as would the library CasADi maps after the check: the
-    cache's files are only ever replaced whole, by a rename, which leaves a mapped file as
-    it was.)"""
+    only), or None where it is not to be trusted (:func:`trusted`)."""
     with _opened(path) as opened:
         if opened is None:
             yield None
             return
-        fd, st = opened
-        size = trailer_bytes(tag)
-        if st.st_size > size:
-            with mmap.mmap(fd, 0, access=mmap.ACCESS_READ) as mapped, \
-                    memoryview(mapped) as whole, whole[:-size] as body, \
-                    whole[-size:] as end:
-                if end == trailer(tag, digest, body):
-                    if checked is not None:
-                        checked.append(st)
-                    yield body
-                    return
-        log.debug("%s is corrupt or was made from something else: ignored", path)
-        yield None
+        with _body(*opened, path, tag, digest) as body:
+            yield body
+
+
+@contextmanager
+def _body(fd: int, st: os.stat_result, path: Path, tag: str, digest: str):
+    """Inside, a view of the bytes before its trailer of the file opened as ``fd`` (status
+    ``st``, :func:`_opened`), or None where the trailer does not seal them with ``tag`` and
+    ``digest``. (A file cut short in place while it is mapped would fault the process, as
+    would the library CasADi maps after the check: the cache's files are only ever replaced
+    whole, by a rename, which leaves a mapped file as it was.)"""
+    size = trailer_bytes(tag)
+    if st.st_size > size:
+        with mmap.mmap(fd, 0, access=mmap.ACCESS_READ) as mapped, \
+                memoryview(mapped) as whole, whole[:-size] as body, whole[-size:] as end:
+            if end == trailer(tag, digest, body):
+                yield body
+                return
+    log.debug("%s is corrupt or was made from something else: ignored", path)
+    yield None
 
 
 def write(path: Path, data: bytes, keep: bool = False) -> Path:

@@ -448,9 +448,14 @@ _MADE: set = set()
 def made_before(problem, count: int) -> bool:
     """Whether this process made a sensitivity record of ``problem``'s mechanism at ``count``
     phases before (its chains' gradient functions, most of a first record's time, built)."""
-    model = problem.model
-    options = tuple(sorted((model.default_options() | dict(problem.options)).items()))
-    return (problem.mechanism, int(count), options) in _MADE
+    return _made_key(problem, count) in _MADE
+
+
+def _made_key(problem, count: int) -> tuple:
+    """(mechanism, count, options) of :data:`_MADE`, the options as a design of ``problem``
+    names them (:attr:`~optdesign.evaluation.design.Design.option_key`)."""
+    return (problem.mechanism, int(count),
+            Design(problem.mechanism, {}, dict(problem.options)).option_key)
 
 
 def sensitivity_record(problem, values: Mapping[str, float],
@@ -463,7 +468,7 @@ def sensitivity_record(problem, values: Mapping[str, float],
         record = sensitivities(problem, values, evaluation).to_dict()
         design = values if isinstance(values, Design) else \
             Design.from_problem(problem, dict(values))
-        _MADE.add((design.mechanism, design.count, design.option_key))
+        _MADE.add(_made_key(problem, design.count))
         return record
     except (ArithmeticError, ValueError, RuntimeError) as exc:
         return {"unavailable": f"{type(exc).__name__}: {exc}"}

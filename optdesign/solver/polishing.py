@@ -408,12 +408,17 @@ def _beside(problem, count: int, held: tuple, checks_in_parallel: bool, values: 
     such polishes that holds those NLPs and the one of a slot per curve
     (:func:`optdesign.kept_children.beside`), else one forked now, which inherits every NLP
     this process holds (:mod:`optdesign.solver.built`). The same polish as here."""
-    key = built.key_of(problem, count)
-    curves = count * len(STROKE_SIGNS[problem.stroke])
     return kept_children.beside(_polish_of, problem, count, tuple(held), checks_in_parallel,
                                 values, avoid, secondary, tuple(checks), generation(),
-                                needs={(key, slots) for slots in (*held, curves)},
-                                inherits=built.held)
+                                needs=_nlps_named(problem, count, held), inherits=built.held)
+
+
+def _nlps_named(problem, count: int, held: tuple = ()) -> set:
+    """The names (:func:`optdesign.solver.built.held`'s) of the count's NLPs of ``held``
+    slots and of the one of a slot per curve: what a child a polish is asked of holds."""
+    key = built.key_of(problem, count)
+    curves = count * len(STROKE_SIGNS[problem.stroke])
+    return {(key, slots) for slots in (*held, curves)}
 
 
 def answer_record_beside(problem, count: int, fn, *args):
@@ -421,10 +426,8 @@ def answer_record_beside(problem, count: int, fn, *args):
     child that holds the count's NLP and is idle (:func:`optdesign.kept_children.beside`:
     the one its polishes beside ran in, which holds the count's functions built), for this
     process to make the rest meanwhile; None where there is none (the caller computes it)."""
-    key = built.key_of(problem, count)
-    curves = count * len(STROKE_SIGNS[problem.stroke])
-    return kept_children.beside(_record_of, generation(), fn, args, needs={(key, curves)},
-                                fork=False)
+    return kept_children.beside(_record_of, generation(), fn, args,
+                                needs=_nlps_named(problem, count), fork=False)
 
 
 def _record_of(forgotten: tuple, fn, args):

@@ -20,6 +20,7 @@ import mmap
 import os
 import stat
 import tempfile
+import time
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -83,6 +84,34 @@ def keep(path: Path, tag: str, digest: str, body: bytes) -> None:
         write(path, body + trailer(tag, digest, body))
     except OSError as exc:
         log.debug("%s not kept (%s)", path.name, exc)
+
+
+def let_go_of_old(where: Path, prefix: str, suffix: str, days: float, most: int) -> None:
+    """Remove this user's regular files in ``where`` named ``prefix``...``suffix`` (records
+    a later process may read, each named by the code that wrote it: every change of the
+    code names new ones) written more than ``days`` ago, and the oldest beyond ``most``;
+    nothing else is touched, no link followed."""
+    oldest = time.time() - days * 86400.0
+    try:
+        entries = [e for e in os.scandir(where)
+                   if e.name.startswith(prefix) and e.name.endswith(suffix)]
+    except OSError:
+        return
+    records = []
+    for entry in entries:
+        try:
+            st = entry.stat(follow_symlinks=False)
+        except OSError:
+            continue
+        if stat.S_ISREG(st.st_mode) and st.st_uid == os.getuid():
+            records.append((st.st_mtime, entry.path))
+    records.sort(reverse=True)                  # the newest first
+    for k, (written, path) in enumerate(records):
+        if k >= most or written < oldest:
+            try:
+                os.unlink(path)
+            except OSError:
+                continue
 
 
 def trailer(tag: str, digest: str, body: bytes) -> bytes:

@@ -30,27 +30,17 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import pickle
-import platform
-import stat
-import sys
-import time
-from functools import lru_cache
-from pathlib import Path
 
-import casadi as ca
-import numpy as np
-
-from optdesign.numerics import user_cache
-from optdesign.warm.place import package_stamp
+from optdesign.numerics import code_stamp, user_cache
 
 #: the record's layout: part of its name
 FORMAT = 1
 #: the records' trailer tag (:mod:`optdesign.numerics.user_cache`)
 TAG = "optdesign-nlp-record"
-#: the package's folder, whose files' stamps name every record (:func:`package_stamp`)
-PACKAGE = Path(__file__).resolve().parents[1]
+#: what the graph's code and constants come from besides the problem (the package's files,
+#: the versions, the machine: :func:`optdesign.numerics.code_stamp.environment`)
+_environment = code_stamp.environment
 
 
 def key_of(problem, count: int, slots: int, criteria, ipopt_options: dict) -> str | None:
@@ -91,7 +81,7 @@ def write(key: str | None, record: dict) -> None:
         return
     body = json.dumps(record | {"format": FORMAT}, separators=(",", ":")).encode()
     user_cache.keep(where / _name(key), TAG, key, body)
-    _let_go_of_old(where)
+    user_cache.let_go_of_old(where, "nlp-record-", ".json", KEPT_DAYS, KEPT_RECORDS)
 
 
 #: a record is named by the package's files too, so every change of the code names new ones:
@@ -104,48 +94,5 @@ KEPT_DAYS = 30
 KEPT_RECORDS = 128
 
 
-def _let_go_of_old(where: Path) -> None:
-    """Remove this user's records (regular files named as :func:`_name` names them) written
-    more than :data:`KEPT_DAYS` ago, and the oldest beyond :data:`KEPT_RECORDS`."""
-    oldest = time.time() - KEPT_DAYS * 86400.0
-    try:
-        entries = [e for e in os.scandir(where)
-                   if e.name.startswith("nlp-record-") and e.name.endswith(".json")]
-    except OSError:
-        return
-    records = []
-    for entry in entries:
-        try:
-            st = entry.stat(follow_symlinks=False)
-        except OSError:
-            continue
-        if stat.S_ISREG(st.st_mode) and st.st_uid == os.getuid():
-            records.append((st.st_mtime, entry.path))
-    records.sort(reverse=True)                  # the newest first
-    for k, (written, path) in enumerate(records):
-        if k >= KEPT_RECORDS or written < oldest:
-            try:
-                os.unlink(path)
-            except OSError:
-                continue
-
-
 def _name(key: str) -> str:
     return f"nlp-record-{key[:40]}.json"
-
-
-@lru_cache(maxsize=1)
-def _environment() -> tuple:
-    """What the graph's code and constants come from besides the problem: the package's
-    files (path, modification time, size), the interpreter's, NumPy's and CasADi's
-    versions, the machine, the C library and the CPU features NumPy dispatches on."""
-    try:
-        from numpy._core._multiarray_umath import __cpu_features__ as features
-    except ImportError:                     # (NumPy before 2)
-        from numpy.core._multiarray_umath import __cpu_features__ as features
-    try:
-        libc = os.confstr("CS_GNU_LIBC_VERSION") or ""
-    except (ValueError, OSError):
-        libc = ""
-    return (package_stamp(PACKAGE), str(PACKAGE), sys.version, np.__version__, ca.__version__,
-            platform.machine(), libc, sorted(k for k, on in features.items() if on))

@@ -15,17 +15,19 @@ file of the package, and the environment variables read as libraries are importe
 threads, matplotlib's, Python's own, ``OPTDESIGN_*``). Anything else a command reads (the rest
 of the environment, the locale, the working folder, the umask, the resource limits, the signals
 ignored) the child takes from the client (:mod:`optdesign.warm.child`). This module imports the
-standard library only: the client runs it before anything else.
+standard library only (and :mod:`optdesign.numerics.code_stamp`'s stamp of the files, which
+does too): the client runs it before anything else.
 """
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import stat
 import sys
 import zlib
 from pathlib import Path
+
+from optdesign.numerics.code_stamp import package_stamp
 
 #: ``off`` (or 0, no, false) runs every command in its own process and starts no server
 VARIABLE = "OPTDESIGN_SERVER"
@@ -136,7 +138,7 @@ def fingerprint(env=os.environ) -> str:
              if name != "utf8_mode"]
     return json.dumps({"python": [sys.executable, sys.version, flags, sys.warnoptions,
                                   sys._xoptions], "encodings": text_encodings(),
-                       "path": paths, "package": [str(PACKAGE), package_stamp()],
+                       "path": paths, "package": [str(PACKAGE), package_stamp(PACKAGE)],
                        "environment": names}, sort_keys=True)
 
 
@@ -149,31 +151,3 @@ def text_encodings() -> list[str]:
     return [codecs.lookup(sys.getfilesystemencoding()).name, sys.getfilesystemencodeerrors(),
             codecs.lookup(locale.getpreferredencoding(False)).name]
 
-
-def package_stamp(folder: Path | None = None) -> str:
-    """A sha256 digest of the relative path, modification time and size of every file under
-    ``folder`` (the package's by default), its bytecode folders aside: what names the code a
-    server runs (:func:`fingerprint`) and what an NLP's record was built by
-    (:mod:`optdesign.solver.nlp_memo`). A file changed in place, added or removed changes it."""
-    folder = PACKAGE if folder is None else folder
-    files = hashlib.sha256()
-    folders = [""]
-    while folders:
-        sub = folders.pop()
-        try:
-            entries = sorted(os.scandir(folder / sub), key=lambda e: e.name)
-        except OSError:
-            continue
-        for entry in entries:
-            name = f"{sub}/{entry.name}" if sub else entry.name
-            try:
-                if entry.is_dir(follow_symlinks=False):
-                    if entry.name != "__pycache__":
-                        folders.append(name)
-                    continue
-                st = entry.stat()
-            except OSError:
-                continue
-            files.update(f"{name}\0{st.st_mtime_ns}\0{st.st_size}\n".encode(
-                "utf-8", "surrogateescape"))
-    return files.hexdigest()

@@ -8,7 +8,7 @@ the NLP's digest, never loaded here) lets these tests make and read records with
 compiler; tests/solve/test_compiled.py solves on a real one, with and without its record."""
 import pytest
 
-from optdesign.numerics import c_library, user_cache
+from optdesign.numerics import c_library, code_stamp, user_cache
 from optdesign.problem.loader import problem_from_dict
 from optdesign.quantities.criteria import constraints_of
 from optdesign.solver import built, compiled, nlp_memo
@@ -163,7 +163,7 @@ def test_the_records_names_change_with_any_file_of_the_package(tmp_path, monkeyp
     (package / "sub" / "__pycache__").mkdir(parents=True)
     (package / "a.py").write_text("x = 1\n")
     (package / "sub" / "b.py").write_text("y = 2\n")
-    monkeypatch.setattr(nlp_memo, "PACKAGE", package)
+    monkeypatch.setattr(code_stamp, "PACKAGE", package)
 
     def stamp():
         nlp_memo._environment.cache_clear()

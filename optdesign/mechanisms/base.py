@@ -17,6 +17,7 @@ import numpy as np
 
 from optdesign.declarations import Key
 from optdesign.envelope.sampled import STROKE_SIGNS  # noqa: F401  (a mechanism's strokes)
+from optdesign.numerics import lanes_index
 from optdesign.numerics.angle_lanes import angle_lanes
 from optdesign.numerics.lanes import Lanes
 
@@ -182,15 +183,21 @@ class Mechanism(ABC):
         """:meth:`kinematics` as NumPy lanes, for grids of many crank angles, cut at every
         atan2 (the four-bar's coupler angle φ2 of eq. (4) of Sharkov & Kalinin, each rocker
         angle θ_k): NumPy takes the angles from their legs between the stages, which, free
-        of atan2, may run compiled (:mod:`optdesign.numerics.angle_lanes`)."""
-        return angle_lanes(self.kinematics(count, options))
+        of atan2, may run compiled (:mod:`optdesign.numerics.angle_lanes`). Made from their
+        record where one is kept (:mod:`optdesign.numerics.lanes_index`: no function to
+        write out and no stages to read back in a later process)."""
+        return lanes_index.made(self, "kinematics", count, options,
+                                lambda: angle_lanes(self.kinematics(count, options)))
 
     @lru_cache(maxsize=64)
     def speed_lanes(self, count: int, options: tuple[tuple[str, str], ...] = ()) -> Lanes:
         """:meth:`speeds` as NumPy lanes: thousands of (φ, p) columns in one call, for
         screening (raises :class:`NotImplementedError` where the function has instructions
-        the lanes do not translate)."""
-        return Lanes(self.speeds(count, options))
+        the lanes do not translate). Made from their record where one is kept
+        (:mod:`optdesign.numerics.lanes_index`: no model of their own to build in a later
+        process)."""
+        return lanes_index.made(self, "speeds", count, options,
+                                lambda: Lanes(self.speeds(count, options)))
 
     def speeds_at_once(self, count: int, options: tuple[tuple[str, str], ...] = ()):
         """:meth:`speeds` evaluated at many (φ, p) columns in one call: the NumPy lanes, or

@@ -59,12 +59,33 @@ class AngleLanes:
     every atan2 outside the lanes between the stages of its :class:`Split` (see the module's
     text). :func:`angle_lanes` makes one, or plain lanes where ``fn`` has no atan2."""
 
-    def __init__(self, fn: ca.Function, cut: Split):
+    def __init__(self, fn: ca.Function | None, cut: Split | None, stages=None):
+        """The lanes of ``cut``'s stages (or ``stages``, those lanes already made, with
+        ``cut``'s places: :meth:`restored`)."""
         self.fn = fn
         #: each stage's lanes
-        self.stages = [Lanes(stage, text) for stage, text in zip(cut.stages, cut.texts)]
+        self.stages = stages if stages is not None else \
+            [Lanes(stage, text) for stage, text in zip(cut.stages, cut.texts)]
         self.places = cut.places
         self.instructions = sum(s.instructions for s in self.stages)
+
+    def record(self) -> dict | None:
+        """What :meth:`restored` makes these lanes again from (each stage's
+        :meth:`~optdesign.numerics.lanes.Lanes.record` and the places), or None where a
+        stage has none."""
+        stages = [s.record() for s in self.stages]
+        if any(r is None for r in stages):
+            return None
+        return {"stages": stages, "places": [list(p) for p in self.places]}
+
+    @classmethod
+    def restored(cls, record: dict) -> "AngleLanes | None":
+        """The lanes a :meth:`record` names (None where a stage's are not to be had)."""
+        stages = [Lanes.restored(r) for r in record["stages"]]
+        if any(s is None for s in stages):
+            return None
+        places = tuple(tuple(int(k) for k in p) for p in record["places"])
+        return cls(None, Split((), places, ()), stages)
 
     @property
     def native(self):

@@ -105,7 +105,7 @@ class Lanes:
         here, unless ``OPTDESIGN_COMPILE=off``)."""
         if not fn.is_a("SXFunction"):
             raise NotImplementedError(f"{fn.name()} is not an SX function")
-        self.fn = fn
+        self.fn, self.name = fn, fn.name()
         self.n_in = fn.n_in()
         self.sizes_in = [fn.nnz_in(i) for i in range(fn.n_in())]
         self.sizes_out = [fn.nnz_out(i) for i in range(fn.n_out())]
@@ -115,19 +115,62 @@ class Lanes:
                 raise NotImplementedError(f"{fn.name()}: input {i} is not a dense column")
         text = _serialized(fn) if serialized is None or user_cache.mode() == "off" \
             else serialized
-        where, digest = _cache_of(text)
-        self._kernel = _compile(fn, where, digest)
+        where, self._digest = _cache_of(text)
+        self._kernel = _compile(fn, where, self._digest)
         #: the same function compiled to C, where it is cached and gives the same bits
         #: (:mod:`optdesign.numerics.native_lanes`); else None and the NumPy kernel runs
         self.native = native_lanes.load(fn, text, where, set(self._kernel.__code__.co_names))
+        #: whether these lanes are all a record names (:meth:`record`): their code kept in
+        #: the cache folder, and the compiled loop loaded wherever one may run
+        self._whole = where is not None and (
+            self.native is not None or
+            not native_lanes.eligible(set(self._kernel.__code__.co_names)))
+
+    def record(self) -> dict | None:
+        """What :meth:`restored` makes these lanes again from, in a later process, without
+        their function: its name and sizes, the digests of its kept code and of its compiled
+        loop; None where either is not in the cache folder (a record would run a later
+        process without the loop it may build)."""
+        if not self._whole:
+            return None
+        return {"name": self.name, "sizes_in": self.sizes_in, "sizes_out": self.sizes_out,
+                "instructions": self.instructions, "code": self._digest,
+                "native": None if self.native is None else self.native.digest}
+
+    @classmethod
+    def restored(cls, record: dict) -> "Lanes | None":
+        """The lanes a :meth:`record` names, from the user's cache folder: the same code
+        and the same compiled loop, so the same values to the bit; None where the folder no
+        longer holds both as they were kept, or a loop that may run is not there."""
+        where = user_cache.in_use()
+        code = _cached(where, record["code"]) if where is not None else None
+        if code is None:
+            return None
+        kernel = _kernel_of(code)
+        functions = set(kernel.__code__.co_names)
+        native = None
+        if record["native"] is not None:
+            native = native_lanes.load_named(record["native"], where, functions)
+            if native is None:
+                return None
+        elif native_lanes.eligible(functions):
+            return None                         # a loop may run here: built from the function
+        lanes = cls.__new__(cls)
+        lanes.fn, lanes.name = None, str(record["name"])
+        lanes.sizes_in = [int(k) for k in record["sizes_in"]]
+        lanes.sizes_out = [int(k) for k in record["sizes_out"]]
+        lanes.n_in, lanes.instructions = len(lanes.sizes_in), int(record["instructions"])
+        lanes._digest, lanes._kernel, lanes.native = record["code"], kernel, native
+        lanes._whole = True
+        return lanes
 
     def __call__(self, *args) -> list[np.ndarray]:
         if len(args) != self.n_in:
-            raise TypeError(f"{self.fn.name()} takes {self.n_in} inputs, got {len(args)}")
+            raise TypeError(f"{self.name} takes {self.n_in} inputs, got {len(args)}")
         arrays = [np.atleast_2d(np.asarray(a, dtype=float)) for a in args]
         for i, (a, rows) in enumerate(zip(arrays, self.sizes_in)):
             if a.shape[0] != rows:
-                raise ValueError(f"{self.fn.name()}: input {i} has {a.shape[0]} rows, "
+                raise ValueError(f"{self.name}: input {i} has {a.shape[0]} rows, "
                                  f"expected {rows}")
         L = max(a.shape[1] for a in arrays) if arrays else 1
         outs = [np.empty((rows, L)) for rows in self.sizes_out]
@@ -135,7 +178,7 @@ class Lanes:
             shared = _THREADS.get() > 1 and L * self.instructions >= NATIVE_SHARED_WORK
             for i, a in enumerate(arrays):
                 if a.shape[1] not in (1, L):
-                    raise ValueError(f"{self.fn.name()}: input {i} has {a.shape[1]} lanes, "
+                    raise ValueError(f"{self.name}: input {i} has {a.shape[1]} lanes, "
                                      f"expected 1 or {L}")
             arrays = [np.ascontiguousarray(a) for a in arrays]
             # two threads at once where the caller owns the cores: ctypes lets go of the
@@ -199,6 +242,11 @@ def _compile(fn: ca.Function, where: Path | None, digest: str):
         code = compile(_source(fn), f"<lanes {fn.name()}>", "exec")
         if where is not None:
             _keep(where, digest, code)
+    return _kernel_of(code)
+
+
+def _kernel_of(code: types.CodeType):
+    """The kernel function :func:`_compile`'s ``code`` defines."""
     namespace = {"np": np}
     kernel = next(c for c in code.co_consts if isinstance(c, types.CodeType))
     if "special" in kernel.co_names:         # erf alone needs scipy (0.2 s to import)

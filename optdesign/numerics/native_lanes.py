@@ -125,8 +125,9 @@ class Native:
     ``last`` - 1 of ``outs`` (C-ordered (rows, lanes) arrays) from ``arrays`` (C-ordered
     (rows, 1 or lanes) arrays), letting go of the interpreter while it runs."""
 
-    def __init__(self, path: Path):
-        self.path = path
+    def __init__(self, path: Path, digest: str):
+        #: the library's file, and the digest of its recipe (:func:`recipe`)
+        self.path, self.digest = path, digest
         run = ctypes.CDLL(str(path)).optdesign_lanes
         run.restype = ctypes.c_int
         run.argtypes = [ctypes.POINTER(ctypes.c_void_p), ctypes.POINTER(ctypes.c_longlong),
@@ -160,10 +161,26 @@ def load(fn: ca.Function, serialized: str | None, where: Path | None,
         if user_cache.mode() == "on":
             c_library.start(rec, where)
         return None
+    native = _loaded(path, rec.digest)
+    if native is not None:
+        user_cache.log.debug("%s: compiled lanes %s", fn.name(), path)
+    return native
+
+
+def load_named(digest: str, where: Path, functions: set[str]) -> Native | None:
+    """:func:`load` of the library of the recipe ``digest`` (:func:`recipe`), from its digest
+    alone (:meth:`optdesign.numerics.lanes.Lanes.restored`), or None: a function whose values
+    the C library would change, or no library intact in ``where`` (no build is started:
+    the caller builds from the function)."""
+    if not eligible(functions):
+        return None
+    path = c_library.library_named(where, digest, "lanes")
+    return None if path is None else _loaded(path, digest)
+
+
+def _loaded(path: Path, digest: str) -> Native | None:
     try:
-        native = Native(path)
+        return Native(path, digest)
     except (OSError, AttributeError) as exc:    # not loadable, or no driver: the NumPy lanes
         user_cache.log.debug("%s not loaded (%s)", path, exc)
         return None
-    user_cache.log.debug("%s: compiled lanes %s", fn.name(), path)
-    return native

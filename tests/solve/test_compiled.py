@@ -42,12 +42,13 @@ def recipe_of(problem) -> compiled.Recipe:
 
 def nlp_files(where) -> list[str]:
     """The names of the NLPs' files in the cache folder (the lanes' code, compiled and not,
-    the kinematics' stages and the Sobol samples kept beside them, numerics/lanes.py,
-    numerics/native_lanes.py, numerics/angle_lanes.py and numerics/sobol.py, aside, and the
-    notes of the checks that passed, numerics/user_cache.py)."""
+    the kinematics' stages, the lanes' records and the Sobol samples kept beside them,
+    numerics/lanes.py, numerics/native_lanes.py, numerics/angle_lanes.py,
+    numerics/lanes_index.py and numerics/sobol.py, aside, and the notes of the checks that
+    passed, numerics/user_cache.py)."""
     return sorted(p.name for p in where.iterdir()
                   if not p.name.startswith(("lanes-", "sobol-", "native-lanes-",
-                                            "angle-stages-"))
+                                            "angle-stages-", "kept-lanes-"))
                   and not p.name.endswith(user_cache.CHECKED))
 
 

@@ -75,11 +75,14 @@ _children: list[_Child] = []
 _lock = threading.RLock()
 
 
-def beside(fn, *args, needs=frozenset(), inherits=frozenset, fork: bool = True):
+def beside(fn, *args, needs=frozenset(), inherits=frozenset, fork: bool = True,
+           gains=frozenset()):
     """``fn(*args)`` computed in a kept child (see the module's text) and a :class:`Kept`
     that waits for its value when called: an idle child of this thread that holds
     ``needs`` (a set of hashable names), else one forked now, which holds ``inherits()``
-    (what this process holds as it forks) and ``needs`` afterwards. Where no child can be
+    (what this process holds as it forks) and ``needs`` afterwards. Either holds ``gains``
+    too once it has computed the value (what computing it builds, that a later value may
+    need: :func:`optdesign.solver.polishing.answer_record_beside`). Where no child can be
     kept (the cap reached, every child busy; no ``fork``), :func:`optdesign.lifetime.beside`'s
     child computes it. Without ``fork``: None where no idle child holds ``needs`` (the
     caller computes the value itself)."""
@@ -115,7 +118,7 @@ def beside(fn, *args, needs=frozenset(), inherits=frozenset, fork: bool = True):
     except Exception:                   # noqa: BLE001 - lost, or arguments that do not pickle
         _let_go(child)
         return lifetime.beside(fn, *args) if fork else None
-    return Kept(fn, args, child, needs)
+    return Kept(fn, args, child, needs | frozenset(gains))
 
 
 def pids() -> frozenset:
@@ -204,8 +207,10 @@ class Kept:
     lost, the value is computed here. :meth:`cancel` ends the child where the value is no
     longer wanted. The same calls as :class:`optdesign.lifetime.Beside`."""
 
-    def __init__(self, fn, args, child: _Child, needs: frozenset):
-        self.fn, self.args, self.child, self.needs = fn, args, child, needs
+    def __init__(self, fn, args, child: _Child, holds: frozenset):
+        #: what the child holds once it has computed the value (:func:`beside`'s ``needs``
+        #: and ``gains``)
+        self.fn, self.args, self.child, self.holds = fn, args, child, holds
 
     def __call__(self):
         child = self.child
@@ -217,7 +222,7 @@ class Kept:
             _let_go(child)
             return self.fn(*self.args)
         with _lock:
-            child.holds |= self.needs
+            child.holds |= self.holds
             child.busy = False
         if kind == "error":
             raise value

@@ -42,6 +42,16 @@ def test_a_value_asked_with_more_than_any_child_holds_is_computed_by_a_new_child
     assert other != child and third == other      # the new child holds "a" and "c" since
 
 
+def test_what_a_value_builds_is_held_by_its_child_afterwards():
+    """``gains``: not asked of a child beforehand, held by the one that computed the value,
+    so a later value that needs it is asked of that child alone."""
+    assert kept_children.beside(_square, 2, needs={"a", "made"}, fork=False) is None
+    _, child = kept_children.beside(_square, 3, needs={"a"}, gains={"made"})()
+    _, same = kept_children.beside(_square, 4, needs={"a", "made"}, fork=False)()
+    assert same == child != os.getpid()
+    assert kept_children.beside(_square, 2, needs={"a", "other"}, fork=False) is None
+
+
 def test_the_childs_error_is_raised_here_and_the_child_serves_on():
     with pytest.raises(ValueError, match="no square of 3"):
         kept_children.beside(_fails, 3)()

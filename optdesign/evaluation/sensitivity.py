@@ -448,12 +448,13 @@ _MADE: set = set()
 def made_before(problem, count: int) -> bool:
     """Whether this process made a sensitivity record of ``problem``'s mechanism at ``count``
     phases before (its chains' gradient functions, most of a first record's time, built)."""
-    return _made_key(problem, count) in _MADE
+    return made_key(problem, count) in _MADE
 
 
-def _made_key(problem, count: int) -> tuple:
-    """(mechanism, count, options) of :data:`_MADE`, the options as a design of ``problem``
-    names them (:attr:`~optdesign.evaluation.design.Design.option_key`)."""
+def made_key(problem, count: int) -> tuple:
+    """(mechanism, count, options) of :data:`_MADE` (what a record at ``count`` builds), the
+    options as a design of ``problem`` names them
+    (:attr:`~optdesign.evaluation.design.Design.option_key`)."""
     return (problem.mechanism, int(count),
             Design(problem.mechanism, {}, dict(problem.options)).option_key)
 
@@ -468,7 +469,7 @@ def sensitivity_record(problem, values: Mapping[str, float],
         record = sensitivities(problem, values, evaluation).to_dict()
         design = values if isinstance(values, Design) else \
             Design.from_problem(problem, dict(values))
-        _MADE.add(_made_key(problem, design.count))
+        _MADE.add(made_key(problem, design.count))
         return record
     except (ArithmeticError, ValueError, RuntimeError) as exc:
         return {"unavailable": f"{type(exc).__name__}: {exc}"}

@@ -17,7 +17,7 @@ import numpy as np
 
 from optdesign.errors import AssemblyError, ProblemError
 from optdesign.evaluation.regulation import quantities_over_range
-from optdesign.evaluation.sensitivity import made_before, sensitivity_record
+from optdesign.evaluation.sensitivity import made_before, made_key, sensitivity_record
 from optdesign.numerics import lanes
 from optdesign.quantities import design_quantities, unit_text
 from optdesign.quantities.bounds import side_key
@@ -388,14 +388,16 @@ def _fill(result: PhaseResult, problem, outcome: Outcome, sensitivities: bool = 
         result.worst_case_min_transmission_angle_deg = angle.value
         result.worst_case_quantities = {case.quantity: case.value for case in bounded}
     result.active = outcome.record.active
-    # the sensitivities on the evaluation at hand: where this process has not made one at the
-    # count (its chains' gradient functions to build) and has the quantities to find still
-    # (no wait for a polish beside made them ahead), by the child the polishes beside ran in,
-    # where it is idle, while this process finds them (the same values)
+    # the sensitivities on the evaluation at hand, by the child the polishes beside ran in
+    # where it is idle (the same values), while this process finds the quantities: where
+    # this process has not made a record at the count (the chains' gradient functions, most
+    # of a first record, to build here as there), or has the quantities still to find (no
+    # wait for a polish beside made them ahead) and the child has made one before
+    here = made_before(problem, result.count)
     pending = answer_record_beside(problem, result.count, sensitivity_record, problem, design,
-                                   ver.evaluation) \
-        if sensitivities and not quantities_made and not made_before(problem, result.count) \
-        else None
+                                   ver.evaluation, builds=made_key(problem, result.count),
+                                   built_there=here) \
+        if sensitivities and not (here and quantities_made) else None
     try:
         result.quantities = design_quantities(
             problem, _every_quantity_searched(problem, ver.evaluation))

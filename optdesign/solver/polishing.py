@@ -421,13 +421,18 @@ def _nlps_named(problem, count: int, held: tuple = ()) -> set:
     return {(key, slots) for slots in (*held, curves)}
 
 
-def answer_record_beside(problem, count: int, fn, *args):
+def answer_record_beside(problem, count: int, fn, *args, builds=None,
+                         built_there: bool = False):
     """``fn(*args)`` (a record of the answer, computed from data alone) begun in a kept
     child that holds the count's NLP and is idle (:func:`optdesign.kept_children.beside`:
     the one its polishes beside ran in, which holds the count's functions built), for this
-    process to make the rest meanwhile; None where there is none (the caller computes it)."""
-    return kept_children.beside(_record_of, generation(), fn, args,
-                                needs=_nlps_named(problem, count), fork=False)
+    process to make the rest meanwhile; None where there is none (the caller computes it).
+    ``builds``: the name of what computing it builds (the child holds it afterwards);
+    ``built_there``: only a child that holds that already."""
+    needs = _nlps_named(problem, count)
+    gains = set() if builds is None else {builds}
+    return kept_children.beside(_record_of, generation(), fn, args, fork=False,
+                                needs=needs | gains if built_there else needs, gains=gains)
 
 
 def _record_of(forgotten: tuple, fn, args):

@@ -6,6 +6,7 @@ from types import SimpleNamespace
 
 import pytest
 
+from optdesign import kept_children
 from optdesign.evaluation import figures
 from optdesign.numerics import heap
 from optdesign.problem.loader import load_problem, problem_from_dict
@@ -396,6 +397,52 @@ def test_the_answers_sensitivities_are_made_beside_while_its_quantities_are_foun
     assert two.per_phase[0].sensitivities["d_delta_d_length_per_mm"]
 
 
+def test_a_later_record_is_asked_of_the_child_that_built_for_one(fresh, monkeypatch,
+                                                                 tmp_path):
+    """A record made beside leaves the chains' gradient functions built in the kept child:
+    a record is asked of it where this process has built none (even with the quantities
+    made ahead: nothing to build here) and, with quantities still to find, where this
+    process has built them too; a child that never made one is not asked where this
+    process has. Each is the one-worker solve's record, to the bit."""
+    import os
+
+    from optdesign.evaluation import sensitivity
+
+    log = tmp_path / "sensitivities"
+    real = sensitivity.sensitivities
+
+    def logged(*args, **kwargs):
+        with open(log, "a") as f:               # from the kept child as well
+            f.write(f"{os.getpid()}\n")
+        return real(*args, **kwargs)
+
+    def waits(made_ahead: bool) -> None:        # whether a wait makes every piece ahead
+        monkeypatch.setattr(kept_children.Kept, "ready", lambda self: not made_ahead)
+
+    monkeypatch.setattr(sensitivity, "sensitivities", logged)
+    monkeypatch.setattr(sensitivity, "_MADE", set())
+    data = file_data(ROOT / "problems" / "sharkov2022_disc.yaml")
+    data.setdefault("solver", {})["workers"] = 2
+    problem = problem_from_dict(data)
+    waits(made_ahead=True)
+    first = solve(problem)                      # none built here: asked beside
+    here = sensitivity.sensitivity_record(problem, first.per_phase[0].design)
+    waits(made_ahead=False)
+    again = solve(problem)                      # built in both: asked beside
+    kept_children.end_all()
+    fresh_child = solve(problem)                # a child that never made one: here
+    made_by = log.read_text().split()
+    data["solver"]["workers"] = 1
+    kept_children.end_all()
+    one = solve(problem_from_dict(data))
+    me = str(os.getpid())
+    assert made_by[1] == made_by[3] == me and made_by[0] == made_by[2] != me
+    assert len(made_by) == 4
+    records = [r.per_phase[0].sensitivities for r in (first, again, fresh_child, one)]
+    assert records[0]["d_delta_d_length_per_mm"]
+    assert all(r == records[-1] for r in records) and here == records[-1]
+
+
 def test_a_sensitivity_record_not_made_beside_is_made_here(fresh, monkeypatch):
     """Where the child's answer is an error (a record that did not come back), the solving
     process makes the record itself: the one-worker solve's."""
@@ -410,7 +457,7 @@ def test_a_sensitivity_record_not_made_beside_is_made_here(fresh, monkeypatch):
             pass
 
     monkeypatch.setattr(sensitivity, "_MADE", set())
-    monkeypatch.setattr(driver, "answer_record_beside", lambda *args: Failed())
+    monkeypatch.setattr(driver, "answer_record_beside", lambda *args, **kwargs: Failed())
     data = file_data(ROOT / "problems" / "sharkov2022_disc.yaml")
     data.setdefault("solver", {})["workers"] = 2
     two = solve(problem_from_dict(data))

@@ -58,6 +58,9 @@ class Polishing:
         self.quantities_made: Outcome | None = None
         #: the line screening through the last design it was asked for (:meth:`_lines_through`)
         self._lines: LineScreening | None = None
+        #: the first line polish, made while a wait for a further basin's polish beside had
+        #: nothing else to make (:meth:`_line_polish_ahead`), with what it knew
+        self._line_ahead: tuple | None = None
 
     def polish(self, values: dict, ver: Verification | None = None) -> Outcome:
         """IPOPT from ``values`` (its start's check ``ver``, when done already), recorded: a
@@ -66,13 +69,15 @@ class Polishing:
         that did not converge stopped, the file's own) is a candidate, not an optimum: beside
         it a basin is polished in full (a box of decades, where the first polish runs out of
         iterations and every later one stalled under the budget)."""
+        return self.record(self._polished(values, ver))
+
+    def _polished(self, values: dict, ver: Verification | None = None) -> Outcome:
+        """:meth:`polish`'s outcome, not recorded."""
         self.solver.avoid = [o.values for o in self.optima]
         try:
-            outcome = self.solver.solve_from(dict(values), ver=ver,
-                                             secondary=self.converged())
+            return self.solver.solve_from(dict(values), ver=ver, secondary=self.converged())
         finally:
             self.solver.avoid = []
-        return self.record(outcome)
 
     def consider(self, outcome: Outcome) -> None:
         """A known design verified as it is (no polish): the best when it meets every
@@ -195,7 +200,7 @@ class Polishing:
                         self.polished - max(self.improved_at, s.basins) >= s.basins):
                     return       # agreed, or `basins` more polishes found nothing better
                 if ahead is not None and ahead[0] == i and ahead[2] == self._known():
-                    outcome, timings, built_slots, _ = self._awaited(ahead[1])
+                    outcome, timings, built_slots, _ = self._awaited(ahead[1], lines_ahead=True)
                     outcome = self._record_made(outcome, timings, built_slots, beside=True)
                     ahead = None
                 else:
@@ -213,13 +218,14 @@ class Polishing:
         finally:
             _dropped(ahead)
 
-    def _awaited(self, pending):
+    def _awaited(self, pending, lines_ahead: bool = False):
         """The value of ``pending``, a polish in a process beside this one. Until it is in,
         this process makes, one at a time, what a later step of the solve will ask of it
-        (:meth:`_while_waiting`): the same computations, on a core that would idle, which
-        that step then finds made (the answer the same to the bit)."""
+        (:meth:`_while_waiting`; with ``lines_ahead``, a further basin's: the first line
+        polish last): the same computations, on a core that would idle, which that step
+        then finds made (the answer the same to the bit)."""
         try:
-            pieces = self._while_waiting()
+            pieces = self._while_waiting(lines_ahead)
             while not pending.ready():
                 piece = next(pieces, None)
                 if piece is None:
@@ -231,7 +237,7 @@ class Polishing:
             pending.cancel()
             raise
 
-    def _while_waiting(self):
+    def _while_waiting(self, lines_ahead: bool = False):
         """What a wait for a polish beside can make ahead (:meth:`_awaited`), in turn: the
         exact check of each design a later step checks as it is that no process beside took
         (:attr:`checked_later`, kept in the evaluator's memory of checked designs); then, for
@@ -240,7 +246,9 @@ class Polishing:
         screening and the lines left share the cores) and, with :attr:`records_later`, its
         figures on the accuracy record's finer grid at each eccentricity (kept in the
         evaluator's memory) and its quantities (their maxima over the turn kept by each
-        quantity): each used where that optimum is still the best when they are asked for."""
+        quantity): each used where that optimum is still the best when they are asked for;
+        with ``lines_ahead`` (a further basin's polish awaited: a wait with little else to
+        make), the first polish of :meth:`lines` last (:meth:`_line_polish_ahead`)."""
         while self.checked_later:
             yield partial(self.solver.as_it_is, self.checked_later.pop(0))
         if self.best is None:
@@ -254,6 +262,8 @@ class Polishing:
             for e in eccentricities_of(self.problem):
                 yield partial(self._refined, design, e)
             yield partial(self._quantities_ahead, self.best)
+        if lines_ahead and self.polished + 1 < self.problem.solver.starts:
+            yield partial(self._line_polish_ahead, self.best)
 
     def _lines_through(self, values: dict) -> LineScreening:
         """The :class:`~optdesign.solver.screening.LineScreening` through ``values``, made once
@@ -278,6 +288,30 @@ class Polishing:
         read); :attr:`quantities_made` names the optimum whose they are."""
         design_quantities(self.problem, best.verification.evaluation)
         self.quantities_made = best
+
+    def _line_polish_ahead(self, best: Outcome) -> None:
+        """The polish :meth:`lines` begins with (its first seed through ``best``), made
+        now, with what the solve knows now: :meth:`lines` takes its outcome where the solve
+        still knows just that (the same best, the same optima, the same NLPs held; nothing
+        built by the polish itself), so it is the polish the turn makes, to the bit."""
+        if self.best is not best or self._lines_through(best.values).remaining:
+            return
+        seeds = self._line_seeds(best.values)
+        if not seeds:
+            return
+        known = self._known()
+        outcome = self._polished(seeds[0].values)
+        if self._known() == known:
+            self._line_ahead = (best, known, seeds[0].values, outcome)
+
+    def _taken_ahead(self, values: dict) -> Outcome | None:
+        """The line polish of ``values`` made ahead (:meth:`_line_polish_ahead`) where the
+        solve knows what it knew then, else None; let go of either way."""
+        ahead, self._line_ahead = self._line_ahead, None
+        if ahead is None or ahead[0] is not self.best or ahead[1] != self._known() or \
+                ahead[2] != values:
+            return None
+        return ahead[3]
 
     def _refined(self, design, e: float) -> None:
         """``design``'s figures at ``e`` on the accuracy record's finer grid, made ahead
@@ -348,7 +382,11 @@ class Polishing:
                 return
             tried.append(beside[0].values)
             before = self.best.verification.key
-            self.polish(beside[0].values)
+            made = self._taken_ahead(beside[0].values) if len(tried) == 1 else None
+            if made is not None:
+                self.record(made)
+            else:
+                self.polish(beside[0].values)
             if self.best.verification.key >= before - SAME_KEY_REL * max(1e-3, abs(before)):
                 return
 

@@ -281,8 +281,8 @@ def test_a_wait_for_a_polish_beside_makes_what_the_solve_asks_for_later(
     made = []
     while_waiting = polishing.Polishing._while_waiting
 
-    def logged(self):
-        for piece in while_waiting(self):
+    def logged(self, *args):
+        for piece in while_waiting(self, *args):
             made.append(piece.func.__name__)
             yield piece
 
@@ -314,6 +314,36 @@ def test_a_wait_for_a_polish_beside_makes_what_the_solve_asks_for_later(
     # made once, ahead (the lines one at a time): no row of a line screening nor a
     # refinement was made twice for one design
     assert made_ahead == calls and "line row" in {c[0] for c in calls if c != "refined"}
+
+
+def test_the_first_line_polish_made_in_a_wait_is_the_one_made_in_turn(fresh, monkeypatch):
+    """The disc problem at 12 phases polishes a further basin beside and then a line through
+    its best optimum: the line polish is made while this process waits for the basin's
+    (nothing else to make then), and taken, as the further basin leaves what the solve
+    knows as it was (here every wait made as long as what it can make). Every record and the answer are the one-worker solve's, to the bit,
+    and those of the solve that makes it again in turn (here forced: none taken), as where
+    the solve knows more by then."""
+    taken = []
+    taken_ahead = polishing.Polishing._taken_ahead
+
+    def logged(self, values):
+        made = taken_ahead(self, values)
+        taken.append(made is not None)
+        return made
+
+    monkeypatch.setattr(polishing.Polishing, "_taken_ahead", logged)
+    # every wait long enough to make all it can (else a race with the polish beside)
+    monkeypatch.setattr(kept_children.Kept, "ready", lambda self: False)
+    data = file_data(ROOT / "problems" / "sharkov2022_disc.yaml", design__phases=12)
+    data.setdefault("solver", {})["workers"] = 2
+    two = solve(problem_from_dict(data))
+    assert taken[:1] == [True]
+    monkeypatch.setattr(polishing.Polishing, "_taken_ahead", lambda self, values: None)
+    again = solve(problem_from_dict(data))
+    data["solver"]["workers"] = 1
+    one = solve(problem_from_dict(data))
+    assert answer(two) == answer(one) == answer(again)
+    assert _records(two) == _records(one) == _records(again)
 
 
 def test_the_files_own_design_is_checked_beside_once_its_polish_is_done(

@@ -13,7 +13,8 @@ here, as a record named by what the function is made from:
 * the mechanism (its registered name and its class), which function (the kinematics or the
   speeds), the count and the options;
 * the code and the constants (:func:`optdesign.numerics.code_stamp.environment`: every file
-  of the package, the versions, the machine) and ``OPTDESIGN_COMPILE``.
+  of the package, the versions, the machine). Not ``OPTDESIGN_COMPILE``: whether builds are
+  started changes nothing a record names (it names only what is in the folder already).
 
 A record is written only for lanes that are whole (their code kept, their compiled loop
 loaded wherever one may run, :meth:`~optdesign.numerics.lanes.Lanes.record`), and read on
@@ -73,8 +74,8 @@ def key_of(mechanism, kind: str, count: int, options: tuple) -> str | None:
         return None
     cls = type(mechanism)
     digest = hashlib.sha256()
-    for part in (FORMAT, code_stamp.environment(), user_cache.mode(), cls.__module__,
-                 cls.__qualname__, mechanism.name, kind, int(count), tuple(options)):
+    for part in (FORMAT, code_stamp.environment(), cls.__module__, cls.__qualname__,
+                 mechanism.name, kind, int(count), tuple(options)):
         digest.update(hashlib.sha256(pickle.dumps(part)).digest())
     return digest.hexdigest()
 

@@ -388,16 +388,18 @@ def _fill(result: PhaseResult, problem, outcome: Outcome, sensitivities: bool = 
         result.worst_case_min_transmission_angle_deg = angle.value
         result.worst_case_quantities = {case.quantity: case.value for case in bounded}
     result.active = outcome.record.active
-    # the sensitivities on the evaluation at hand, by the child the polishes beside ran in
-    # where it is idle (the same values), while this process finds the quantities: where
-    # this process has not made a record at the count (the chains' gradient functions, most
-    # of a first record, to build here as there), or has the quantities still to find (no
-    # wait for a polish beside made them ahead) and the child has made one before
+    # the sensitivities on the evaluation at hand, where this process has the quantities
+    # still to find (no wait for a polish beside made them ahead), by the child the polishes
+    # beside ran in, where it is idle, while this process finds them (the same values): any
+    # such child where this process has not made a record at the count (the chains'
+    # gradient functions, most of a first record, to build here as there), else one that
+    # has made one too (with the quantities made, the record is made here: a child would
+    # add the trip there and back to a record this process makes as fast)
     here = made_before(problem, result.count)
     pending = answer_record_beside(problem, result.count, sensitivity_record, problem, design,
                                    ver.evaluation, builds=made_key(problem, result.count),
                                    built_there=here) \
-        if sensitivities and not (here and quantities_made) else None
+        if sensitivities and not quantities_made else None
     try:
         result.quantities = design_quantities(
             problem, _every_quantity_searched(problem, ver.evaluation))

@@ -429,11 +429,10 @@ def test_the_answers_sensitivities_are_made_beside_while_its_quantities_are_foun
 
 def test_a_later_record_is_asked_of_the_child_that_built_for_one(fresh, monkeypatch,
                                                                  tmp_path):
-    """A record made beside leaves the chains' gradient functions built in the kept child:
-    a record is asked of it where this process has built none (even with the quantities
-    made ahead: nothing to build here) and, with quantities still to find, where this
-    process has built them too; a child that never made one is not asked where this
-    process has. Each is the one-worker solve's record, to the bit."""
+    """With the quantities to find here (no wait made them ahead), a record is asked of the
+    kept child: any where this process has built none (the chains' gradient functions),
+    else only one that made a record before (a child that never made one is not asked).
+    Each is the one-worker solve's record, to the bit."""
     import os
 
     from optdesign.evaluation import sensitivity
@@ -446,28 +445,24 @@ def test_a_later_record_is_asked_of_the_child_that_built_for_one(fresh, monkeypa
             f.write(f"{os.getpid()}\n")
         return real(*args, **kwargs)
 
-    def waits(made_ahead: bool) -> None:        # whether a wait makes every piece ahead
-        monkeypatch.setattr(kept_children.Kept, "ready", lambda self: not made_ahead)
-
     monkeypatch.setattr(sensitivity, "sensitivities", logged)
     monkeypatch.setattr(sensitivity, "_MADE", set())
+    monkeypatch.setattr(kept_children.Kept, "ready", lambda self: True)   # no wait makes any
     data = file_data(ROOT / "problems" / "sharkov2022_disc.yaml")
     data.setdefault("solver", {})["workers"] = 2
     problem = problem_from_dict(data)
-    waits(made_ahead=True)
     first = solve(problem)                      # none built here: asked beside
     here = sensitivity.sensitivity_record(problem, first.per_phase[0].design)
-    waits(made_ahead=False)
     again = solve(problem)                      # built in both: asked beside
     kept_children.end_all()
-    fresh_child = solve(problem)                # a child that never made one: here
+    fresh_child = solve(problem)                # a child that never made one: made here
     made_by = log.read_text().split()
     data["solver"]["workers"] = 1
     kept_children.end_all()
     one = solve(problem_from_dict(data))
     me = str(os.getpid())
-    assert made_by[1] == made_by[3] == me and made_by[0] == made_by[2] != me
     assert len(made_by) == 4
+    assert made_by[1] == made_by[3] == me and made_by[0] == made_by[2] != me
     records = [r.per_phase[0].sensitivities for r in (first, again, fresh_child, one)]
     assert records[0]["d_delta_d_length_per_mm"]
     assert all(r == records[-1] for r in records) and here == records[-1]

@@ -28,7 +28,6 @@ method replaced) is never recorded: the code stamp would not name it.
 from __future__ import annotations
 
 import hashlib
-import json
 import pickle
 
 from optdesign.numerics import code_stamp, user_cache
@@ -95,16 +94,7 @@ def _packaged(mechanism) -> bool:
 
 def read(key: str | None) -> dict | None:
     """The record named ``key``, or None: none kept, or one not to be trusted or read."""
-    if key is None:
-        return None
-    body = user_cache.kept(user_cache.in_use(), _name(key), TAG, key)
-    if body is None:
-        return None
-    try:
-        record = json.loads(body)
-    except ValueError:
-        return None
-    return record if isinstance(record, dict) and record.get("format") == FORMAT else None
+    return None if key is None else user_cache.read_record(_name(key), TAG, key, FORMAT)
 
 
 def restored(record: dict):
@@ -120,12 +110,9 @@ def restored(record: dict):
 def write(key: str, record: dict) -> None:
     """Keep ``record`` as ``key``'s (atomically; a failure costs the next process the
     function's build), and let go of old ones (:data:`KEPT_DAYS`, :data:`KEPT_RECORDS`)."""
-    where = user_cache.in_use()
-    if where is None:
-        return
-    body = json.dumps(record | {"format": FORMAT}, separators=(",", ":")).encode()
-    user_cache.keep(where / _name(key), TAG, key, body)
-    user_cache.let_go_of_old(where, "kept-lanes-", ".json", KEPT_DAYS, KEPT_RECORDS)
+    where = user_cache.write_record(_name(key), TAG, key, FORMAT, record)
+    if where is not None:
+        user_cache.let_go_of_old(where, "kept-lanes-", ".json", KEPT_DAYS, KEPT_RECORDS)
 
 
 def _name(key: str) -> str:

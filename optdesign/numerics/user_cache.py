@@ -15,6 +15,7 @@ compiler: the test suite), ``off`` (nothing is read from the folder or written t
 from __future__ import annotations
 
 import hashlib
+import json
 import logging
 import mmap
 import os
@@ -84,6 +85,32 @@ def keep(path: Path, tag: str, digest: str, body: bytes) -> None:
         write(path, body + trailer(tag, digest, body))
     except OSError as exc:
         log.debug("%s not kept (%s)", path.name, exc)
+
+
+def read_record(name: str, tag: str, digest: str, layout: int) -> dict | None:
+    """The JSON record kept as ``name`` in the folder in use (:func:`kept`, sealed with
+    ``tag`` and ``digest``), or None: no folder, none kept, one not to be trusted, not to be
+    read, or not of ``layout`` (its ``format``)."""
+    body = kept(in_use(), name, tag, digest)
+    if body is None:
+        return None
+    try:
+        record = json.loads(body)
+    except ValueError:
+        return None
+    return record if isinstance(record, dict) and record.get("format") == layout else None
+
+
+def write_record(name: str, tag: str, digest: str, layout: int, record: dict) -> Path | None:
+    """Keep ``record`` (with its ``format``, ``layout``) as ``name`` in the folder in use,
+    atomically (:func:`keep`: a failure costs the next process the making alone); the
+    folder, or None where there is none."""
+    where = in_use()
+    if where is None:
+        return None
+    body = json.dumps(record | {"format": layout}, separators=(",", ":")).encode()
+    keep(where / name, tag, digest, body)
+    return where
 
 
 def let_go_of_old(where: Path, prefix: str, suffix: str, days: float, most: int) -> None:

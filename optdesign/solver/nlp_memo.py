@@ -29,7 +29,6 @@ functions as CasADi serialised them, the layout as the build laid it out
 from __future__ import annotations
 
 import hashlib
-import json
 import pickle
 
 from optdesign.numerics import code_stamp, user_cache
@@ -61,27 +60,17 @@ def key_of(problem, count: int, slots: int, criteria, ipopt_options: dict) -> st
 def read(key: str | None) -> dict | None:
     """The record named ``key``, or None: no folder in use, none kept, or one not to be
     trusted or not to be read."""
-    if key is None:
-        return None
-    body = user_cache.kept(user_cache.in_use(), _name(key), TAG, key)
-    if body is None:
-        return None
-    try:
-        record = json.loads(body)
-    except ValueError:
-        return None
-    return record if isinstance(record, dict) and record.get("format") == FORMAT else None
+    return None if key is None else user_cache.read_record(_name(key), TAG, key, FORMAT)
 
 
 def write(key: str | None, record: dict) -> None:
     """Keep ``record`` as ``key``'s (atomically; a failure costs the next process its graph),
     and let go of the records written more than :data:`KEPT_DAYS` ago."""
-    where = user_cache.in_use()
-    if key is None or where is None:
+    if key is None:
         return
-    body = json.dumps(record | {"format": FORMAT}, separators=(",", ":")).encode()
-    user_cache.keep(where / _name(key), TAG, key, body)
-    user_cache.let_go_of_old(where, "nlp-record-", ".json", KEPT_DAYS, KEPT_RECORDS)
+    where = user_cache.write_record(_name(key), TAG, key, FORMAT, record)
+    if where is not None:
+        user_cache.let_go_of_old(where, "nlp-record-", ".json", KEPT_DAYS, KEPT_RECORDS)
 
 
 #: a record is named by the package's files too, so every change of the code names new ones:

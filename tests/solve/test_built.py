@@ -392,15 +392,13 @@ def test_a_second_solve_polishes_beside_in_the_kept_child_and_answers_the_same(
     assert answer(first) == answer(again) == answer(one)
 
 
-def test_the_answers_sensitivities_are_made_beside_while_its_quantities_are_found_here(
-        fresh, monkeypatch, tmp_path):
-    """A count solved alone: its answer's sensitivity record, the first this process makes
-    at the count, is made by the kept child its polish beside ran in, while this process
-    finds the answer's quantities (here no wait for a polish beside made them ahead): the
-    record of the one-worker solve, which makes it here, to the bit."""
+@pytest.fixture
+def records_logged(monkeypatch, tmp_path):
+    """A file each sensitivity record's process writes its pid to (the kept child's as
+    well), no record made at any count yet, and no wait for a polish beside making any
+    piece ahead (the quantities are found in ``_fill``)."""
     import os
 
-    from optdesign import kept_children
     from optdesign.evaluation import sensitivity
 
     log = tmp_path / "sensitivities"
@@ -414,6 +412,18 @@ def test_the_answers_sensitivities_are_made_beside_while_its_quantities_are_foun
     monkeypatch.setattr(sensitivity, "sensitivities", logged)
     monkeypatch.setattr(sensitivity, "_MADE", set())
     monkeypatch.setattr(kept_children.Kept, "ready", lambda self: True)   # no wait makes any
+    return log
+
+
+def test_the_answers_sensitivities_are_made_beside_while_its_quantities_are_found_here(
+        fresh, records_logged):
+    """A count solved alone: its answer's sensitivity record, the first this process makes
+    at the count, is made by the kept child its polish beside ran in, while this process
+    finds the answer's quantities (here no wait for a polish beside made them ahead): the
+    record of the one-worker solve, which makes it here, to the bit."""
+    import os
+
+    log = records_logged
     data = file_data(ROOT / "problems" / "sharkov2022_disc.yaml")
     data.setdefault("solver", {})["workers"] = 2
     two = solve(problem_from_dict(data))
@@ -427,8 +437,7 @@ def test_the_answers_sensitivities_are_made_beside_while_its_quantities_are_foun
     assert two.per_phase[0].sensitivities["d_delta_d_length_per_mm"]
 
 
-def test_a_later_record_is_asked_of_the_child_that_built_for_one(fresh, monkeypatch,
-                                                                 tmp_path):
+def test_a_later_record_is_asked_of_the_child_that_built_for_one(fresh, records_logged):
     """With the quantities to find here (no wait made them ahead), a record is asked of the
     kept child: any where this process has built none (the chains' gradient functions),
     else only one that made a record before (a child that never made one is not asked).
@@ -437,17 +446,7 @@ def test_a_later_record_is_asked_of_the_child_that_built_for_one(fresh, monkeypa
 
     from optdesign.evaluation import sensitivity
 
-    log = tmp_path / "sensitivities"
-    real = sensitivity.sensitivities
-
-    def logged(*args, **kwargs):
-        with open(log, "a") as f:               # from the kept child as well
-            f.write(f"{os.getpid()}\n")
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(sensitivity, "sensitivities", logged)
-    monkeypatch.setattr(sensitivity, "_MADE", set())
-    monkeypatch.setattr(kept_children.Kept, "ready", lambda self: True)   # no wait makes any
+    log = records_logged
     data = file_data(ROOT / "problems" / "sharkov2022_disc.yaml")
     data.setdefault("solver", {})["workers"] = 2
     problem = problem_from_dict(data)

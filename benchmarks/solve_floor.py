@@ -39,7 +39,7 @@ Before measuring, the race's NLPs are compiled into the user's cache (``optdesig
 recipes, then one solve that starts a build of any NLP the warm-up did not foresee, waited
 for); ``--no-warm-up`` skips that.
 
-    python benchmarks/solve_floor.py [--problems disc_n6 ...] [--rounds 3] [--repeats 3]
+    python benchmarks/solve_floor.py [--problems disc_n6 ...] [--rounds 5] [--repeats 3]
 
 Writes benchmarks/results/solve_floor.md (three tables: the floor, where the warm solve
 goes, compiled against the virtual machine) and solve_floor.json.
@@ -138,19 +138,25 @@ def child(case: str, repeats: int) -> dict:
     from optdesign.evaluation.figures import forget
 
     result, first = timed_solve(problem)
-    warm = []
+    answer = answer_phase(problem, result)
+    # each warm solve followed by a floor of its own, so a ratio compares two measures
+    # seconds apart (paired_ratios): the machine's speed drifts
+    warm, floors = [], []
     for _ in range(repeats):
         forget()
         cpu0 = cpu_seconds()
         warm.append(timed_solve(problem)[1])
         reaped()
         warm[-1]["cpu_every_process_s"] = cpu_seconds() - cpu0
+        floors.append(floor(problem, answer, repeats))
     again = timed_solve(problem)[1]             # the memory of the solve before kept
-    answer = answer_phase(problem, result)
     # a solve of several counts polishes each: the floor of each count's own winning run
     each = [floor(problem, p, repeats)["floor_s"] if p is not answer else None
             for p in result.per_phase if p.status == "optimal"]
-    mine = floor(problem, answer, repeats)
+    mine = {k: statistics.median(f[k] for f in floors) if isinstance(floors[0][k], float)
+            else floors[0][k] for k in floors[0]}
+    for w, f in zip(warm, floors):
+        w["floor_s"] = f["floor_s"]
     return {"first": first, "warm": warm, "again": again, "floor": mine,
             "floor_every_count_s": sum(mine["floor_s"] if f is None else f for f in each),
             "optimal_counts": len(each),
@@ -236,7 +242,27 @@ def summary(runs: list[dict]) -> dict:
             "iterations": runs[0]["warm"][0]["iterations"],
             "winning_iterations": runs[0]["floor"]["winning_run_iterations"],
             "compiled_nlps": min(r["compiled_nlps"] for r in runs),
-            "nlps": max(r["nlps"] for r in runs)}
+            "nlps": max(r["nlps"] for r in runs)} | paired_ratios(runs)
+
+
+def paired_ratios(runs: list[dict]) -> dict:
+    """Each ratio to a floor as the median over the rounds of each process's own: its first
+    solve over its floor, and the median of its warm solves each over the floor measured
+    right after it; to the answer's count's floor, and to every count's summed (the other
+    counts' floors measured once per process). The machine's speed drifts (on a shared one,
+    by up to a factor of two within minutes): a ratio of medians taken minutes apart moves
+    with it, one of two measures seconds apart much less."""
+    def ratios(r):
+        answer = r["floor"]["floor_s"]
+        others = r.get("floor_every_count_s", answer) - answer
+        warm = [(w["time_s"], w.get("floor_s", answer)) for w in r["warm"]]
+        return {"first_over_answer": r["first"]["time_s"] / answer,
+                "first_over_every": r["first"]["time_s"] / (answer + others),
+                "warm_over_answer": statistics.median(t / f for t, f in warm),
+                "warm_over_every": statistics.median(t / (f + others) for t, f in warm)}
+
+    each = [ratios(r) for r in runs]
+    return {k: statistics.median(e[k] for e in each) for k in each[0]}
 
 
 def same_answer(a: list[dict], b: list[dict]) -> bool:
@@ -249,17 +275,22 @@ def same_answer(a: list[dict], b: list[dict]) -> bool:
 def tables(results: dict) -> str:
     lines = ["| problem | floor [ms] | warm solve [s] | warm / floor | first solve [s] | "
              "first / floor | the solver's imports, once per process [s] | counts solved: "
-             "the floor of each, summed [ms] | warm / that floor | the same solve again [s] |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "the floor of each, summed [ms] | warm / that floor | first / that floor | the same "
+             "solve again [s] |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for case, r in results.items():
         c = r["compiled"]
         every = c.get("floor_every_count_s", c["floor_s"])
         counts = c.get("optimal_counts", 1)
+        ratio = lambda solve, floor_name: c.get(        # noqa: E731 (runs before had none)
+            f"{solve}_over_{floor_name}",
+            c[f"{solve}_s"] / (every if floor_name == "every" else c["floor_s"]))
         lines.append(f"| {case} | {1e3 * c['floor_s']:.0f} | {c['warm_s']:.3f} | "
-                     f"{c['warm_s'] / c['floor_s']:.1f}× | {c['first_s']:.3f} | "
-                     f"{c['first_s'] / c['floor_s']:.1f}× | {c.get('imports_s', math.nan):.2f} | "
-                     + (f"{counts}: {1e3 * every:.0f} | {c['warm_s'] / every:.1f}× |"
-                        if counts > 1 else "1 | – |") + f" {c['again_s']:.3f} |")
+                     f"{ratio('warm', 'answer'):.1f}× | {c['first_s']:.3f} | "
+                     f"{ratio('first', 'answer'):.1f}× | {c.get('imports_s', math.nan):.2f} | "
+                     + (f"{counts}: {1e3 * every:.0f} | {ratio('warm', 'every'):.1f}× | "
+                        f"{ratio('first', 'every'):.1f}× |"
+                        if counts > 1 else "1 | – | – |") + f" {c['again_s']:.3f} |")
     lines += ["", "| problem | floor: IPOPT + check [ms] | build | screening | IPOPT | "
               "verification | of these, in a process beside the solve's | rest | IPOPT "
               "iterations: winning run / solve | CPU of every process [ms] | CPU / floor |",
@@ -293,13 +324,15 @@ def header(args: dict) -> str:
             f"built and compiled, plus one exact check), in-process, medians of "
             f"{args['rounds']} fresh processes per mode × {args['repeats']} warm solves, each "
             f"after the evaluator's memory of checked designs is emptied (the same solve again "
-            f"keeps it); the virtual machine's and the compiled processes alternating.\n\n")
+            f"keeps it); the virtual machine's and the compiled processes alternating. Each "
+            f"ratio to a floor is the median of each process's own (its solves over the floor "
+            f"it measured), not the quotient of the columns' medians.\n\n")
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--problems", nargs="+", choices=list(CASES), default=list(CASES))
-    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--repeats", type=int, default=3,
                         help="warm solves (and floor runs) per process")
     parser.add_argument("--no-warm-up", action="store_true",

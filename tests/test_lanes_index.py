@@ -23,8 +23,7 @@ def made(name: str, kind: str, count: int = COUNT):
     """The mechanism's lanes of ``kind`` as a solve asks for them (its record read or
     written), the mechanism's lru caches emptied first (a new process)."""
     model = get_mechanism(name)
-    for cached in (model.kinematic_lanes, model.speed_lanes):
-        cached.cache_clear()
+    model.lanes_made.cache_clear()
     return (model.kinematic_lanes if kind == "kinematics" else model.speed_lanes)(count, ())
 
 

@@ -114,8 +114,7 @@ def _fresh_lanes() -> None:
     """Every mechanism's lanes made anew (each decides at birth whether it runs compiled)."""
     for name in known():
         model = get_mechanism(name)
-        model.kinematic_lanes.cache_clear()
-        model.speed_lanes.cache_clear()
+        model.lanes_made.cache_clear()
     kept_nlps.forget()
 
 
@@ -246,3 +245,23 @@ def test_a_compiled_call_of_an_exact_grid_is_shared_between_two_threads(loaded, 
         assert started == ["lanes"] * helpers
         assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(alone, shared))
         started.clear()
+
+
+def test_lanes_made_under_one_mode_are_not_given_under_another(loaded, monkeypatch):
+    """A process that turns the compiled code off after making lanes is given lanes made
+    under ``off`` (the NumPy lanes alone), and made under ``load`` again the compiled ones,
+    as its NLPs are: lanes decide at birth whether their loop runs compiled."""
+    model = vergov().model
+    try:
+        monkeypatch.setenv(user_cache.VARIABLE, "load")
+        _fresh_lanes()
+        compiled = model.kinematic_lanes(3, ())
+        if compiled.native is None:
+            pytest.skip("no compiled lanes on this machine")
+        monkeypatch.setenv(user_cache.VARIABLE, "off")
+        assert model.kinematic_lanes(3, ()).native is None
+        assert model.speed_lanes(3, ()).native is None
+        monkeypatch.setenv(user_cache.VARIABLE, "load")
+        assert model.kinematic_lanes(3, ()) is compiled
+    finally:
+        _fresh_lanes()

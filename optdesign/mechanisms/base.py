@@ -17,7 +17,7 @@ import numpy as np
 
 from optdesign.declarations import Key
 from optdesign.envelope.sampled import STROKE_SIGNS  # noqa: F401  (a mechanism's strokes)
-from optdesign.numerics import lanes_index
+from optdesign.numerics import lanes_index, user_cache
 from optdesign.numerics.angle_lanes import angle_lanes
 from optdesign.numerics.lanes import Lanes
 
@@ -178,25 +178,36 @@ class Mechanism(ABC):
                            [model["dtheta"], ca.vertcat(*model["cos_mu"])],
                            ["phi", "p"], ["dtheta", "cos_mu"])
 
-    @lru_cache(maxsize=64)
     def kinematic_lanes(self, count: int, options: tuple[tuple[str, str], ...] = ()):
         """:meth:`kinematics` as NumPy lanes, for grids of many crank angles, cut at every
         atan2 (the four-bar's coupler angle φ2 of eq. (4) of Sharkov & Kalinin, each rocker
         angle θ_k): NumPy takes the angles from their legs between the stages, which, free
         of atan2, may run compiled (:mod:`optdesign.numerics.angle_lanes`). Made from their
         record where one is kept (:mod:`optdesign.numerics.lanes_index`: no function to
-        write out and no stages to read back in a later process)."""
-        return lanes_index.made(self, "kinematics", count, options,
-                                lambda: angle_lanes(self.kinematics(count, options)))
+        write out and no stages to read back in a later process); once per
+        ``OPTDESIGN_COMPILE`` in use (:meth:`lanes_made`)."""
+        return self.lanes_made("kinematics", count, options, user_cache.mode())
 
-    @lru_cache(maxsize=64)
     def speed_lanes(self, count: int, options: tuple[tuple[str, str], ...] = ()) -> Lanes:
         """:meth:`speeds` as NumPy lanes: thousands of (φ, p) columns in one call, for
         screening (raises :class:`NotImplementedError` where the function has instructions
         the lanes do not translate). Made from their record where one is kept
         (:mod:`optdesign.numerics.lanes_index`: no model of their own to build in a later
-        process)."""
-        return lanes_index.made(self, "speeds", count, options,
+        process); once per ``OPTDESIGN_COMPILE`` in use (:meth:`lanes_made`)."""
+        return self.lanes_made("speeds", count, options, user_cache.mode())
+
+    @lru_cache(maxsize=128)
+    def lanes_made(self, kind: str, count: int, options: tuple[tuple[str, str], ...],
+                   mode: str):
+        """The lanes of ``kind`` (``"kinematics"``, ``"speeds"``), made once per ``mode``
+        (``OPTDESIGN_COMPILE``): lanes decide as they are made whether their loop runs
+        compiled, so a process that turns the compiled code off (or on) after making some
+        is given lanes made under its mode now, as its NLPs are (a benchmark that times
+        both modes in one process)."""
+        if kind == "kinematics":
+            return lanes_index.made(self, kind, count, options,
+                                    lambda: angle_lanes(self.kinematics(count, options)))
+        return lanes_index.made(self, kind, count, options,
                                 lambda: Lanes(self.speeds(count, options)))
 
     def speeds_at_once(self, count: int, options: tuple[tuple[str, str], ...] = ()):

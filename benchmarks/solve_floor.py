@@ -5,7 +5,9 @@ Per problem of the race (``benchmarks/solve_vs_peers.py``'s ``CASES``):
 * **the floor**: one IPOPT run from the start whose polish won (the NLP built beforehand, its
   derivatives compiled, :mod:`optdesign.solver.compiled`), plus one exact check of the answer
   (``verify``, the evaluator's cache emptied): what a solver that knew the winning start and
-  still verified its answer would spend; the median of ``--repeats``; where the problem
+  still verified its answer would spend; the median of ``--repeats``, measured in each
+  process after each warm solve (each ratio to it the median of each process's own:
+  :func:`paired_ratios`); where the problem
   has several admissible counts, also the floor of every count its solve found an optimum
   for, summed (each count's own winning run and check): a solve that must show each count's
   optimum (``per_phase``) cannot spend less;

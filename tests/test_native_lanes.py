@@ -265,3 +265,20 @@ def test_lanes_made_under_one_mode_are_not_given_under_another(loaded, monkeypat
         assert model.kinematic_lanes(3, ()) is compiled
     finally:
         _fresh_lanes()
+
+
+def test_a_quantitys_lanes_made_under_one_mode_are_not_given_under_another(loaded,
+                                                                            monkeypatch):
+    """The lanes a quantity's search samples a function on (``extremes.lanes_of``) are made
+    once per ``OPTDESIGN_COMPILE`` as well: compiled under ``load``, the NumPy lanes alone
+    under ``off``, the compiled ones again under ``load``."""
+    from optdesign.quantities import extremes
+
+    fn = function("fourbar_converter", "speeds")
+    compiled = extremes.lanes_of(fn)
+    if compiled is None or compiled.native is None:
+        pytest.skip("no compiled lanes of this function on this machine")
+    monkeypatch.setenv(user_cache.VARIABLE, "off")
+    assert extremes.lanes_of(fn).native is None
+    monkeypatch.setenv(user_cache.VARIABLE, "load")
+    assert extremes.lanes_of(fn) is compiled

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from optdesign.numerics import user_cache
 from optdesign.numerics.buffered import buffered
 from optdesign.numerics.kept import keep
 from optdesign.numerics.lanes import Lanes
@@ -199,17 +200,21 @@ def component(function, i: int):
     return made[i]
 
 
-#: the lanes of the functions sampled so far (None: the function does not translate)
+#: the lanes of the functions sampled so far, by function and ``OPTDESIGN_COMPILE`` (None:
+#: the function does not translate)
 _LANES: dict = {}
 
 
 def lanes_of(function):
-    """The NumPy lanes of ``function``, made once (None where it does not translate)."""
-    known = _LANES.get(id(function))
+    """The NumPy lanes of ``function``, made once per ``OPTDESIGN_COMPILE`` in use (None
+    where it does not translate): lanes decide as they are made whether their loop runs
+    compiled, as a mechanism's do (:meth:`~optdesign.mechanisms.base.Mechanism.lanes_made`)."""
+    key = (id(function), user_cache.mode())
+    known = _LANES.get(key)
     if known is None or known[0] is not function:
         try:
             lanes = Lanes(function)
         except NotImplementedError:
             lanes = None
-        known = _LANES[id(function)] = (function, lanes)
+        known = _LANES[key] = (function, lanes)
     return known[1]

@@ -204,11 +204,10 @@ class Mechanism(ABC):
         compiled, so a process that turns the compiled code off (or on) after making some
         is given lanes made under its mode now, as its NLPs are (a benchmark that times
         both modes in one process)."""
-        if kind == "kinematics":
-            return lanes_index.made(self, kind, count, options,
-                                    lambda: angle_lanes(self.kinematics(count, options)))
+        lanes, function = (angle_lanes, self.kinematics) if kind == "kinematics" else \
+            (Lanes, self.speeds)
         return lanes_index.made(self, kind, count, options,
-                                lambda: Lanes(self.speeds(count, options)))
+                                lambda: lanes(function(count, options)))
 
     def speeds_at_once(self, count: int, options: tuple[tuple[str, str], ...] = ()):
         """:meth:`speeds` evaluated at many (φ, p) columns in one call: the NumPy lanes, or

@@ -284,14 +284,11 @@ def tables(results: dict) -> str:
         c = r["compiled"]
         every = c.get("floor_every_count_s", c["floor_s"])
         counts = c.get("optimal_counts", 1)
-        ratio = lambda solve, floor_name: c.get(        # noqa: E731 (runs before had none)
-            f"{solve}_over_{floor_name}",
-            c[f"{solve}_s"] / (every if floor_name == "every" else c["floor_s"]))
         lines.append(f"| {case} | {1e3 * c['floor_s']:.0f} | {c['warm_s']:.3f} | "
-                     f"{ratio('warm', 'answer'):.1f}× | {c['first_s']:.3f} | "
-                     f"{ratio('first', 'answer'):.1f}× | {c.get('imports_s', math.nan):.2f} | "
-                     + (f"{counts}: {1e3 * every:.0f} | {ratio('warm', 'every'):.1f}× | "
-                        f"{ratio('first', 'every'):.1f}× |"
+                     f"{c['warm_over_answer']:.1f}× | {c['first_s']:.3f} | "
+                     f"{c['first_over_answer']:.1f}× | {c.get('imports_s', math.nan):.2f} | "
+                     + (f"{counts}: {1e3 * every:.0f} | {c['warm_over_every']:.1f}× | "
+                        f"{c['first_over_every']:.1f}× |"
                         if counts > 1 else "1 | – | – |") + f" {c['again_s']:.3f} |")
     lines += ["", "| problem | floor: IPOPT + check [ms] | build | screening | IPOPT | "
               "verification | of these, in a process beside the solve's | rest | IPOPT "

@@ -1,5 +1,5 @@
 """Figures saved faster and pixel for pixel the same: the tight box measured without drawing
-(optdesign.outputs.atomic), and the mechanism drawing rendered as two bands by two processes
+(optdesign.outputs.atomic; a figure laid out by ``tight_layout`` too), and the mechanism drawing rendered as two bands by two processes
 and joined (optdesign.outputs.split_figure)."""
 import io
 from functools import partial
@@ -45,6 +45,53 @@ def test_the_figures_saved_with_the_box_measured_beforehand_are_the_tight_ones(m
     for plot in (partial(plot_mechanism, design), partial(plot_speeds, design, "forward", 97.0)):
         path = atomic_savefig(plot(), tmp_path / "fig.png")
         assert np.array_equal(_pixels(path.read_bytes()), _tight(plot()))
+
+
+def _laid_out():
+    """Panels laid out once by ``tight_layout`` (as the front's, the drive's and the atlas's
+    figures are), which leaves matplotlib's placeholder engine on the figure."""
+    fig, axes = plt.subplots(2, 3, figsize=(9, 5), sharex=True)
+    for k, ax in enumerate(axes.ravel()[:5]):
+        ax.plot(np.linspace(0.1, 0.6, 9), np.linspace(k, 3 * k + 1, 9) ** 2, marker="o",
+                label=f"n = {k + 4}")
+        ax.axhline(k, ls="--", lw=1.0)
+        ax.annotate(f"lower {k:g}", (1.0, k), xycoords=("axes fraction", "data"), ha="right")
+        ax.set_title(f"l{k}")
+        ax.set_ylabel(f"l{k} [mm]")
+    axes.ravel()[-1].set_visible(False)
+    axes[0, 0].legend(fontsize=7.5)
+    fig.suptitle("free lengths along the front")
+    fig.tight_layout()
+    return fig
+
+
+def test_a_figure_laid_out_by_tight_layout_is_drawn_once_to_savefigs_pixels(tmp_path,
+                                                                           monkeypatch):
+    from matplotlib.figure import Figure
+    from matplotlib.layout_engine import PlaceHolderLayoutEngine
+
+    fig = _laid_out()
+    engine = fig.get_layout_engine()
+    assert isinstance(engine, PlaceHolderLayoutEngine)
+    drawn, draw = [], Figure.draw
+    monkeypatch.setattr(Figure, "draw", lambda self, renderer: drawn.append(1) or
+                        draw(self, renderer))
+    path = atomic_savefig(fig, tmp_path / "laid_out.png")
+    assert len(drawn) == 1                              # savefig's own "tight" draws twice
+    assert fig.get_layout_engine() is engine            # given back after the save
+    monkeypatch.undo()
+    assert np.array_equal(_pixels(path.read_bytes()), _tight(_laid_out()))
+
+
+def test_a_figure_with_an_engine_to_run_keeps_savefigs_own_tight(tmp_path):
+    fig, ax = plt.subplots(layout="constrained")
+    ax.plot([0, 1], [0, 1])
+    ax.set_title("constrained")
+    path = atomic_savefig(fig, tmp_path / "constrained.png")
+    again, ax = plt.subplots(layout="constrained")
+    ax.plot([0, 1], [0, 1])
+    ax.set_title("constrained")
+    assert np.array_equal(_pixels(path.read_bytes()), _tight(again))
 
 
 @pytest.mark.parametrize("mechanism", sorted(DESIGNS))

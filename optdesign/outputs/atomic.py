@@ -5,6 +5,7 @@ import json
 import math
 import os
 import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 
 #: The layout version of every JSON document the package writes or prints: its
@@ -113,18 +114,43 @@ def atomic_savefig(fig, path: str | Path, **kwargs) -> Path:
     if options["bbox_inches"] == "tight" and _measurable(fig, fmt):
         options["bbox_inches"] = padded(content_bbox(fig, options["dpi"]),
                                         options.pop("pad_inches", None))
-    fig.savefig(buf, format=fmt, **options)
+        with _layout_done(fig):
+            fig.savefig(buf, format=fmt, **options)
+    else:
+        fig.savefig(buf, format=fmt, **options)
     return atomic_write_bytes(path, buf.getvalue())
 
 
 def _measurable(fig, fmt: str) -> bool:
     """True when :func:`content_bbox` gives the box savefig's "tight" finds for ``fig``: a
-    PNG of an Agg canvas without a layout engine (whose layout needs savefig's first
-    drawing)."""
+    PNG of an Agg canvas without a layout engine to run (whose layout needs savefig's first
+    drawing). A figure laid out once by ``fig.tight_layout()`` holds matplotlib's
+    placeholder engine, which lays out nothing at a drawing: it is measured too."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.layout_engine import PlaceHolderLayoutEngine
 
+    engine = fig.get_layout_engine()
     return (fmt == "png" and isinstance(fig.canvas, FigureCanvasAgg)
-            and fig.get_layout_engine() is None)
+            and (engine is None or isinstance(engine, PlaceHolderLayoutEngine)))
+
+
+@contextmanager
+def _layout_done(fig):
+    """``fig`` without its placeholder engine while it is saved: savefig draws a figure
+    that holds any engine once unseen before it renders it, for a layout that the
+    placeholder does not make; the engine is given back after."""
+    engine = fig.get_layout_engine()
+    if engine is None:
+        yield
+        return
+    import matplotlib as mpl
+
+    with mpl.rc_context({"figure.autolayout": False, "figure.constrained_layout.use": False}):
+        fig.set_layout_engine(None)         # None under these settings: no engine at all
+    try:
+        yield
+    finally:
+        fig.set_layout_engine(engine)
 
 
 def content_bbox(fig, dpi: float):

@@ -1,6 +1,6 @@
 """Figures saved faster and pixel for pixel the same: the tight box measured without drawing
-(optdesign.outputs.atomic; a figure laid out by ``tight_layout`` too), and the mechanism drawing rendered as two bands by two processes
-and joined (optdesign.outputs.split_figure)."""
+(optdesign.outputs.atomic; a figure laid out by ``tight_layout`` too), and the mechanism
+drawing rendered as two bands by two processes and joined (optdesign.outputs.split_figure)."""
 import io
 from functools import partial
 
@@ -83,15 +83,17 @@ def test_a_figure_laid_out_by_tight_layout_is_drawn_once_to_savefigs_pixels(tmp_
     assert np.array_equal(_pixels(path.read_bytes()), _tight(_laid_out()))
 
 
-def test_a_figure_with_an_engine_to_run_keeps_savefigs_own_tight(tmp_path):
+def _constrained():
+    """One panel under the constrained engine, which lays the figure out at each drawing."""
     fig, ax = plt.subplots(layout="constrained")
     ax.plot([0, 1], [0, 1])
     ax.set_title("constrained")
-    path = atomic_savefig(fig, tmp_path / "constrained.png")
-    again, ax = plt.subplots(layout="constrained")
-    ax.plot([0, 1], [0, 1])
-    ax.set_title("constrained")
-    assert np.array_equal(_pixels(path.read_bytes()), _tight(again))
+    return fig
+
+
+def test_a_figure_with_an_engine_to_run_keeps_savefigs_own_tight(tmp_path):
+    path = atomic_savefig(_constrained(), tmp_path / "constrained.png")
+    assert np.array_equal(_pixels(path.read_bytes()), _tight(_constrained()))
 
 
 @pytest.mark.parametrize("mechanism", sorted(DESIGNS))

@@ -5,7 +5,7 @@ import json
 import math
 import os
 import tempfile
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
 #: The layout version of every JSON document the package writes or prints: its
@@ -111,12 +111,11 @@ def atomic_savefig(fig, path: str | Path, **kwargs) -> Path:
     buf = io.BytesIO()
     fmt = Path(path).suffix.lstrip(".") or "png"
     options = {"dpi": 120, "bbox_inches": "tight"} | kwargs
-    if options["bbox_inches"] == "tight" and _measurable(fig, fmt):
+    measured = options["bbox_inches"] == "tight" and _measurable(fig, fmt)
+    if measured:
         options["bbox_inches"] = padded(content_bbox(fig, options["dpi"]),
                                         options.pop("pad_inches", None))
-        with _layout_done(fig):
-            fig.savefig(buf, format=fmt, **options)
-    else:
+    with _layout_done(fig) if measured else nullcontext():
         fig.savefig(buf, format=fmt, **options)
     return atomic_write_bytes(path, buf.getvalue())
 

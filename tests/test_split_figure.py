@@ -1,6 +1,7 @@
 """Figures saved faster and pixel for pixel the same: the tight box measured without drawing
-(optdesign.outputs.atomic; a figure laid out by ``tight_layout`` too), and the mechanism
-drawing rendered as two bands by two processes and joined (optdesign.outputs.split_figure)."""
+(optdesign.outputs.atomic; a figure laid out by ``tight_layout`` or the constrained engine
+too), and the mechanism drawing rendered as two bands by two processes and joined
+(optdesign.outputs.split_figure)."""
 import io
 from functools import partial
 
@@ -84,16 +85,44 @@ def test_a_figure_laid_out_by_tight_layout_is_drawn_once_to_savefigs_pixels(tmp_
 
 
 def _constrained():
-    """One panel under the constrained engine, which lays the figure out at each drawing."""
-    fig, ax = plt.subplots(layout="constrained")
-    ax.plot([0, 1], [0, 1])
-    ax.set_title("constrained")
+    """Two panels under the constrained engine, which lays the figure out at each drawing
+    (as the simulation's angles are drawn: a shared time axis, legends, a long title)."""
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 5.6), sharex=True,
+                                      layout="constrained", height_ratios=[1.6, 1])
+    t = np.linspace(0.0, 0.064, 400)
+    top.plot(t, np.sin(40 * t), label="ψ (output shaft)")
+    top.set_title("a title as long as the drive's: angles over the steady cycle, ε_max")
+    bottom.plot(t, 0.01 * np.cos(40 * t) ** 2, label="ε1")
+    bottom.set_xlabel("t, s")
+    for ax in (top, bottom):
+        ax.legend(loc="upper left", fontsize=8)
+        ax.set_ylabel("angle, rad")
     return fig
 
 
-def test_a_figure_with_an_engine_to_run_keeps_savefigs_own_tight(tmp_path):
-    path = atomic_savefig(_constrained(), tmp_path / "constrained.png")
-    assert np.array_equal(_pixels(path.read_bytes()), _tight(_constrained()))
+@pytest.mark.parametrize("dpi", [72, 110, 120])
+def test_a_figure_under_the_constrained_engine_is_laid_out_and_drawn_once(tmp_path, dpi,
+                                                                          monkeypatch):
+    """Its layout made once at the file's dpi (savefig's first drawing makes it so), then
+    one drawing: savefig's own pixels, and the engine given back."""
+    from matplotlib.figure import Figure
+    from matplotlib.layout_engine import ConstrainedLayoutEngine
+
+    fig = _constrained()
+    engine = fig.get_layout_engine()
+    drawn, draw = [], Figure.draw
+    laid_out, execute = [], ConstrainedLayoutEngine.execute
+    monkeypatch.setattr(Figure, "draw", lambda self, renderer: drawn.append(1) or
+                        draw(self, renderer))
+    monkeypatch.setattr(ConstrainedLayoutEngine, "execute", lambda self, f: laid_out.append(1)
+                        or execute(self, f))
+    path = atomic_savefig(fig, tmp_path / "constrained.png", dpi=dpi)
+    assert (len(drawn), len(laid_out)) == (1, 1)        # savefig's own: two and one
+    assert fig.get_layout_engine() is engine
+    monkeypatch.undo()
+    buf = io.BytesIO()
+    _constrained().savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
+    assert np.array_equal(_pixels(path.read_bytes()), _pixels(buf.getvalue()))
 
 
 @pytest.mark.parametrize("mechanism", sorted(DESIGNS))

@@ -113,6 +113,7 @@ def atomic_savefig(fig, path: str | Path, **kwargs) -> Path:
     options = {"dpi": 120, "bbox_inches": "tight"} | kwargs
     measured = options["bbox_inches"] == "tight" and _measurable(fig, fmt)
     if measured:
+        _lay_out(fig, options["dpi"])
         options["bbox_inches"] = padded(content_bbox(fig, options["dpi"]),
                                         options.pop("pad_inches", None))
     with _layout_done(fig) if measured else nullcontext():
@@ -122,22 +123,41 @@ def atomic_savefig(fig, path: str | Path, **kwargs) -> Path:
 
 def _measurable(fig, fmt: str) -> bool:
     """True when :func:`content_bbox` gives the box savefig's "tight" finds for ``fig``: a
-    PNG of an Agg canvas without a layout engine to run (whose layout needs savefig's first
-    drawing). A figure laid out once by ``fig.tight_layout()`` holds matplotlib's
-    placeholder engine, which lays out nothing at a drawing: it is measured too."""
+    PNG of an Agg canvas without a layout engine, with matplotlib's placeholder engine (a
+    figure laid out once by ``fig.tight_layout()``: it lays out nothing at a drawing) or with
+    the constrained engine (the simulation's, the curves' and the drive shaft's figures),
+    whose layout :func:`_lay_out` makes once, as savefig's first drawing would."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.layout_engine import PlaceHolderLayoutEngine
+    from matplotlib.layout_engine import ConstrainedLayoutEngine, PlaceHolderLayoutEngine
 
     engine = fig.get_layout_engine()
     return (fmt == "png" and isinstance(fig.canvas, FigureCanvasAgg)
-            and (engine is None or isinstance(engine, PlaceHolderLayoutEngine)))
+            and (engine is None
+                 or isinstance(engine, (PlaceHolderLayoutEngine, ConstrainedLayoutEngine))))
+
+
+def _lay_out(fig, dpi: float) -> None:
+    """The constrained engine's layout of ``fig`` made at ``dpi``, as savefig's unseen
+    first drawing makes it before it measures the tight box (the layout measures the text at
+    the dpi of the file); other figures are left as they are."""
+    from matplotlib.layout_engine import ConstrainedLayoutEngine
+
+    engine = fig.get_layout_engine()
+    if not isinstance(engine, ConstrainedLayoutEngine) or not fig.axes:
+        return
+    kept = fig.dpi
+    fig.dpi = dpi
+    try:
+        engine.execute(fig)
+    finally:
+        fig.dpi = kept
 
 
 @contextmanager
 def _layout_done(fig):
-    """``fig`` without its placeholder engine while it is saved: savefig draws a figure
-    that holds any engine once unseen before it renders it, for a layout that the
-    placeholder does not make; the engine is given back after."""
+    """``fig`` without its layout engine while it is saved: savefig draws a figure that
+    holds any engine once unseen before it renders it, for a layout that the placeholder
+    does not make and :func:`_lay_out` has made; the engine is given back after."""
     engine = fig.get_layout_engine()
     if engine is None:
         yield

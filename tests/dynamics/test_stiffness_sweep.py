@@ -8,10 +8,10 @@ JSON (no NaN, no Infinity) whose ``status`` and ``reason`` say the same; never a
 (the command's catch-all would turn one into an "internal error" line, refused here).
 
 Reduced setting, to keep the file near a minute on two busy cores: rtol 1e-6, atol 1e-8 and
-two crank turns (``cycles: 2``: one turn to start from, one recorded), and the two figures
-replaced by empty ones (tests/dynamics/test_simulate.py draws the real ones). Two turns do not reach a steady
-cycle, so most runs here end "NOT steady" (exit 1): what is tested is that every corner ends
-in a stated outcome. Undamped, the reducer at λ = 1e7 and 1e8 and the four-bar at 1e8 ring
+two crank turns (``cycles: 2``: one turn to start from, one recorded), and the four figures
+replaced by empty ones (tests/dynamics/test_simulate.py draws the real ones). Two turns do
+not reach a steady cycle, so most runs here end "NOT steady" (exit 1): what is tested is that
+every corner ends in a stated outcome. Undamped, the reducer at λ = 1e7 and 1e8 and the four-bar at 1e8 ring
 at √(λ/I2) = 1.4e4 to 4.5e4 rad/s and need 5-20 s a run even so: those corners, every corner
 on both methods, and every corner at the problem files' own settings (100 turns, rtol 1e-8),
 run in ``benchmarks/dynamics_stiffness.py --sweep``, whose table is in docs/benchmarks.md.
@@ -57,13 +57,18 @@ def _refuse(constant):
 
 @pytest.fixture
 def no_figures(monkeypatch):
-    """Empty figures instead of the paper's two (0.3 s a run saved)."""
+    """Empty figures instead of the command's four (the angles, the speeds, the loads and
+    the natural frequencies: 1.3 s of drawing a run saved)."""
     from matplotlib.figure import Figure
 
-    from optdesign.dynamics import plots
+    from optdesign.dynamics import plots, resonance
 
-    monkeypatch.setattr(plots, "plot_angles", lambda result: Figure(figsize=(1, 1)))
-    monkeypatch.setattr(plots, "plot_speeds", lambda result: Figure(figsize=(1, 1)))
+    def empty(*_):
+        return Figure(figsize=(1, 1))
+
+    for module, name in ((plots, "plot_angles"), (plots, "plot_speeds"),
+                         (plots, "plot_loads"), (resonance, "plot_frequencies")):
+        monkeypatch.setattr(module, name, empty)
 
 
 def simulate_command(tmp_path, capsys, problem: str, changes: dict, options=()):

@@ -23,9 +23,11 @@ run: $(STAMP)
 	$(VENV)/bin/optdesign analyze problems/sharkov2022.yaml
 	$(VENV)/bin/optdesign solve problems/sharkov2022_disc.yaml --out results/sharkov2022_disc
 
-# The suite in two processes (pytest-xdist), a test file to each: 5 min 35 s on 2 cores, where
-# one process took 8.5-10 minutes. A file's tests stay together, so its module-scoped fixtures (a
-# solved front, a simulated drive) are computed once. `pytest` alone runs it in one process.
+# The suite in two processes (pytest-xdist), a test file to each: 9 min 30 s of pytest on two
+# busy cores on a clean clone (2026-12-03), about twice as long in one process. A file's tests
+# stay together, so its module-scoped fixtures (a solved front, a simulated drive) are computed
+# once; the heaviest files go first (tests/conftest.py), so the workers end together.
+# `pytest` alone runs it in one process.
 TEST_WORKERS ?= 2
 
 test: $(STAMP)

@@ -18,19 +18,20 @@ os.environ["OPTDESIGN_SERVER"] = "off"
 os.environ["XDG_CACHE_HOME"] = tempfile.mkdtemp(prefix="optdesign-test-cache-")
 atexit.register(shutil.rmtree, os.environ["XDG_CACHE_HOME"], True)
 os.environ["OPTDESIGN_COMPILE"] = "load"
-#: The suite's heaviest files (wall seconds on two busy cores, 2026-12-03), run first: the
-#: Makefile hands out whole files (``--dist loadfile``) in collection order
-#: (``--no-loadscope-reorder``; pytest-xdist would otherwise order them by their count of
-#: tests and leave the few long ones for last), so the two workers end together, the light
-#: files last. A file missing here only runs in its usual place.
+#: The suite's heaviest files (wall seconds on two busy cores, 2026-12-03, the two
+#: simulation files' after their reductions of that day), run first: the Makefile hands out
+#: whole files (``--dist loadfile``) in collection order (``--no-loadscope-reorder``;
+#: pytest-xdist would otherwise order them by their count of tests and leave the few long
+#: ones for last), so the two workers end together, the light files last. A file missing here
+#: only runs in its usual place; a stale order costs balance, never a result.
 HEAVIEST_FIRST = (
-    "dynamics/test_stiffness_sweep.py",     # 78
     "test_fuzz_cli.py",                     # 65
     "pareto/test_notebook.py",              # 58
     "solve/test_verdicts.py",               # 53
-    "dynamics/test_simulate.py",            # 47
+    "dynamics/test_stiffness_sweep.py",     # 50
     "warm/test_warm_server.py",             # 41
     "solve/test_oracle.py",                 # 35
+    "dynamics/test_simulate.py",            # 35
     "test_split_figure.py",                 # 34
     "solve/test_robust.py",                 # 30
     "dynamics/test_outcomes.py",            # 29

@@ -32,10 +32,10 @@ def _pixels(data: bytes) -> np.ndarray:
     return np.asarray(Image.open(io.BytesIO(data)))
 
 
-def _tight(fig) -> np.ndarray:
+def _tight(fig, dpi: float = 120) -> np.ndarray:
     """The pixels savefig writes with its own "tight" (drawing the figure twice)."""
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=120, bbox_inches="tight")
+    fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
     return _pixels(buf.getvalue())
 
 
@@ -120,9 +120,7 @@ def test_a_figure_under_the_constrained_engine_is_laid_out_and_drawn_once(tmp_pa
     assert (len(drawn), len(laid_out)) == (1, 1)        # savefig's own: two and one
     assert fig.get_layout_engine() is engine
     monkeypatch.undo()
-    buf = io.BytesIO()
-    _constrained().savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
-    assert np.array_equal(_pixels(path.read_bytes()), _pixels(buf.getvalue()))
+    assert np.array_equal(_pixels(path.read_bytes()), _tight(_constrained(), dpi))
 
 
 @pytest.mark.parametrize("mechanism", sorted(DESIGNS))

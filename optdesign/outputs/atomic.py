@@ -143,14 +143,9 @@ def _lay_out(fig, dpi: float) -> None:
     from matplotlib.layout_engine import ConstrainedLayoutEngine
 
     engine = fig.get_layout_engine()
-    if not isinstance(engine, ConstrainedLayoutEngine) or not fig.axes:
-        return
-    kept = fig.dpi
-    fig.dpi = dpi
-    try:
-        engine.execute(fig)
-    finally:
-        fig.dpi = kept
+    if isinstance(engine, ConstrainedLayoutEngine) and fig.axes:
+        with _at_dpi(fig, dpi):
+            engine.execute(fig)
 
 
 @contextmanager
@@ -176,10 +171,17 @@ def content_bbox(fig, dpi: float):
     """The box [inches] around what ``fig`` shows, measured at ``dpi`` without drawing it:
     ``savefig(bbox_inches="tight")`` draws a figure twice, once unseen to lay it out and find
     this box, then to render it; given the box (:func:`padded`), once, to the same pixels."""
+    with _at_dpi(fig, dpi):
+        return fig.get_tightbbox(fig.canvas.get_renderer())
+
+
+@contextmanager
+def _at_dpi(fig, dpi: float):
+    """``fig`` at ``dpi`` (the file's, as savefig sets it) for a while, then at its own."""
     kept = fig.dpi
     fig.dpi = dpi
     try:
-        return fig.get_tightbbox(fig.canvas.get_renderer())
+        yield
     finally:
         fig.dpi = kept
 

@@ -11,10 +11,11 @@ Reduced setting, to keep the file near a minute on two busy cores: rtol 1e-6, at
 two crank turns (``cycles: 2``: one turn to start from, one recorded), and the four figures
 replaced by empty ones (tests/dynamics/test_simulate.py draws the real ones). Two turns do
 not reach a steady cycle, so most runs here end "NOT steady" (exit 1): what is tested is that
-every corner ends in a stated outcome. Undamped, the reducer at λ = 1e7 and 1e8 and the four-bar at 1e8 ring
-at √(λ/I2) = 1.4e4 to 4.5e4 rad/s and need 5-20 s a run even so: those corners, every corner
-on both methods, and every corner at the problem files' own settings (100 turns, rtol 1e-8),
-run in ``benchmarks/dynamics_stiffness.py --sweep``, whose table is in docs/benchmarks.md.
+every corner ends in a stated outcome. Undamped, the reducer at λ = 1e7 and 1e8 and the
+four-bar at 1e8 ring at √(λ/I2) = 1.4e4 to 4.5e4 rad/s and need 5-20 s a run even so: those
+corners, every corner on both methods, and every corner at the problem files' own settings
+(100 turns, rtol 1e-8), run in ``benchmarks/dynamics_stiffness.py --sweep``, whose table is
+in docs/benchmarks.md.
 """
 import json
 

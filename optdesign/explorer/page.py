@@ -201,7 +201,9 @@ class Page:
                      pn.Row(self.table, *front)]
         else:
             right = [self.headline, self.message, drawing, speeds, self.table, *front]
-        return pn.Row(left, pn.Column(*right), css_classes=["explore-page"])
+        from optdesign.explorer.inline import InlineRow
+
+        return InlineRow(left, pn.Column(*right), css_classes=["explore-page"])
 
     # ----------------------------------------------------------------- actions
     def _act(self, action, *args) -> bool:

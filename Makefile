@@ -31,13 +31,12 @@ run: $(STAMP)
 # The suite in two processes (pytest-xdist), a test file to each: 7 min 55 s of pytest, 9 min
 # 26 s with the venv and the install, on two cores on a clean clone (2026-12-03, `time bash
 # .ci/run`; the machine's load moves it by a minute or more), about twice as long in one
-# process. A file's tests
-# stay together, so its module-scoped fixtures (a solved front, a simulated drive) are computed
-# once; the heaviest files go first (tests/conftest.py), so the workers end together.
-# PYTHONDONTWRITEBYTECODE is lifted for the suite alone: each of its two hundred processes
-# would otherwise compile anew the modules its files import that are not yet compiled (the
-# project's, as it changes: 0.27 s a solve), and pytest its rewritten test modules in each
-# worker. The bytecode goes to __pycache__ folders, which git ignores.
+# process. A file's tests stay together, so its module-scoped fixtures (a solved front, a
+# simulated drive) are computed once; the heaviest files go first (tests/conftest.py), so the
+# workers end together. PYTHONDONTWRITEBYTECODE is lifted for the suite alone: each of its
+# two hundred processes would otherwise compile anew every module it imports that has no
+# bytecode yet (the project's, changed since the install: 0.27 s of a solve), and each worker
+# pytest's rewritten test modules. The bytecode goes to __pycache__ folders, which git ignores.
 # `pytest` alone runs it in one process.
 TEST_WORKERS ?= 2
 

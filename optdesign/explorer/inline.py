@@ -3,8 +3,8 @@
 In a notebook the explorer's scripts and styles travel with it (``pn.extension(inline=True)``:
 nothing from the internet), so Panel replaces every model's imported stylesheets by inline
 ones as it displays the page, one model at a time. Each of those assignments makes Bokeh
-collect the document's whole model graph again: for the explorer's 54 models that took more
-than a second of the two or three its display takes. :class:`InlineRow` makes the same
+collect the document's whole model graph again: on a small four-bar front's page, 54 times
+and more than a second of the two or three its display took. :class:`InlineRow` makes the same
 assignments while the document's models are frozen, so Bokeh collects the graph once, after
 them; Panel's own pass then finds every stylesheet inline already and assigns nothing. The
 page shown is the same (tests/explorer/test_inline.py compares the two displays).

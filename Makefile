@@ -28,10 +28,10 @@ run: $(STAMP)
 	$(VENV)/bin/optdesign analyze problems/sharkov2022.yaml
 	$(VENV)/bin/optdesign solve problems/sharkov2022_disc.yaml --out results/sharkov2022_disc
 
-# The suite in two processes (pytest-xdist), a test file to each: 7 min 55 s of pytest, 9 min
-# 26 s with the venv and the install, on two cores on a clean clone (2026-12-03, `time bash
-# .ci/run`; the machine's load moves it by a minute or more), about twice as long in one
-# process. A file's tests stay together, so its module-scoped fixtures (a solved front, a
+# The suite in two processes (pytest-xdist), a test file to each: 9 min 1 s with the venv and
+# the install, 7.5 to 8 min of it pytest, on two cores on a clean clone (2026-12-03, the median
+# of two runs of `bash .ci/run`; the machine's load moves it by two minutes either way), about
+# twice as long in one process. A file's tests stay together, so its module-scoped fixtures (a solved front, a
 # simulated drive) are computed once; the heaviest files go first (tests/conftest.py), so the
 # workers end together. PYTHONDONTWRITEBYTECODE is lifted for the suite alone: each of its
 # two hundred processes would otherwise compile anew every module it imports that has no

@@ -31,13 +31,13 @@ run: $(STAMP)
 # The suite in two processes (pytest-xdist), a test file to each: 9 min 1 s with the venv and
 # the install, 7.5 to 8 min of it pytest, on two cores on a clean clone (2026-12-03, the median
 # of two runs of `bash .ci/run`; the machine's load moves it by two minutes either way), about
-# twice as long in one process. A file's tests stay together, so its module-scoped fixtures (a solved front, a
-# simulated drive) are computed once; the heaviest files go first (tests/conftest.py), so the
-# workers end together. PYTHONDONTWRITEBYTECODE is lifted for the suite alone: each of its
-# two hundred processes would otherwise compile anew every module it imports that has no
-# bytecode yet (the project's, changed since the install: 0.27 s of a solve), and each worker
-# pytest's rewritten test modules. The bytecode goes to __pycache__ folders, which git ignores.
-# `pytest` alone runs it in one process.
+# twice as long in one process. A file's tests stay together, so its module-scoped fixtures (a
+# solved front, a simulated drive) are computed once; the heaviest files go first
+# (tests/conftest.py), so the workers end together. PYTHONDONTWRITEBYTECODE is lifted for the
+# suite alone: each of its two hundred processes would otherwise compile anew every module it
+# imports that has no bytecode yet (the project's, changed since the install: 0.27 s of a
+# solve), and each worker pytest's rewritten test modules. The bytecode goes to __pycache__
+# folders, which git ignores. `pytest` alone runs it in one process.
 TEST_WORKERS ?= 2
 
 test: $(STAMP)

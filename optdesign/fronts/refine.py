@@ -440,8 +440,11 @@ def plan_hypervolume(records: list[dict], lengths: list[str], settings: Refineme
         jobs = []
         for n in counts:
             lo, hi = gain(a), gain(b)
+            # an ε at a's own gain (to the dominance tolerance) is a's problem, not one
+            # inside the gap: a's own ε lies just above its ratio when the ratio bound holds
+            # to IPOPT's tolerance, below it
             inside = [t for t in records if t.get("count") == n and
-                      t.get("epsilon") is not None and lo < t["epsilon"] < hi]
+                      t.get("epsilon") is not None and _more(lo) < t["epsilon"] < hi]
             if any(not _ok(t) or gain(t) < _less(gain(b))
                    for t in inside):
                 continue

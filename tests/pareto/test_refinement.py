@@ -144,6 +144,17 @@ def test_a_hypervolume_gap_where_a_count_jumps_is_not_tried_again():
     assert plan_hypervolume([a, b, failed], LENGTHS, settings, 3) == []
 
 
+def test_a_hypervolume_gap_is_filled_when_its_lower_end_meets_its_own_bound_to_the_tolerance():
+    """IPOPT holds a point's ratio bound to its tolerance: the design's ratio may lie a hair
+    below its own ε. That ε is the lower end's problem, not an ε inside the gap that landed
+    there (a dominated point), so the gap is refined as if the bound held to the bit."""
+    b = _on(4, 1, 0.90, 0.50, mult=0.1)
+    settings = Refinement(hypervolume_gap=1e-3, hypervolume_points=40)
+    exact = plan_hypervolume([_on(4, 0, 0.80, 0.10, mult=0.1), b], LENGTHS, settings, 2)
+    short = _on(4, 0, 0.80, 0.10, mult=0.1, eps=0.80 + 2e-11)
+    assert exact and plan_hypervolume([short, b], LENGTHS, settings, 2) == exact
+
+
 # --------------------------------------------------------------------------- (b) merging
 def test_identical_designs_are_merged_into_one_row():
     d = {"l1": 25.0, "l3": 30.0, "phases": 4}

@@ -5,7 +5,8 @@ the build beside it (:mod:`optdesign.solver.compiled`), and one that finds no co
 of the mechanism's kinematics runs them as NumPy statements and starts theirs
 (:mod:`optdesign.numerics.native_lanes`); this command builds every admissible phase count's
 NLP and both lanes (the kinematics, and the speeds the screening reads) now, as many at once
-as there are cores, and prints where each library is. Exit 0 when every library is in place;
+as there are cores, and prints where each library is (for a file with a ``pareto:`` section,
+each count's NLP with the exact Hessian too: a front's warm-started points run on it). Exit 0 when every library is in place;
 1 when one could not be built (no C compiler on PATH, no cache folder of the user's own, a
 compiler that failed: solves then run on the virtual machine and the NumPy lanes, as
 before); 2 for bad input (one line naming the file and key).
@@ -38,7 +39,7 @@ def run(args) -> int:
         print(f"optdesign warm-up: no C compiler ({compiled.COMPILER}) on PATH: solves run "
               f"on CasADi's virtual machine", file=sys.stderr)
         return 1
-    nlps = nlps_of(problem)
+    nlps = [(nlp, hessian) for nlp in nlps_of(problem) for hessian in hessians_of(problem)]
     labels, recipes = zip(*(_recipes(problem, nlps) + lanes_recipes_of(problem)))
     ok, built = True, []
     for label, (_, path, seconds, note) in zip(labels, compiled.warm_up(
@@ -53,26 +54,35 @@ def run(args) -> int:
     # each compiled NLP's record beside its library (optdesign.solver.nlp_memo), kept as its
     # IPOPT is made on the library (an NLP left on the virtual machine is not made here: its
     # derivatives' functions would take seconds to build)
-    for nlp, on_library in zip(nlps, built):
+    for (nlp, hessian), on_library in zip(nlps, built):
         if on_library:
-            nlp.solver(nlp.problem.solver.hessian)
+            nlp.solver(hessian)
     return 0 if ok else 1
+
+
+def hessians_of(problem) -> list[str]:
+    """The Hessians whose IPOPT the file's commands run: its ``solver.hessian``, and the
+    exact one where it has a ``pareto:`` section (a front's warm-started points run on it:
+    docs/pareto.md, "Warm starts")."""
+    own = problem.solver.hessian
+    return [own] + (["exact"] if problem.method.pareto is not None and own != "exact" else [])
 
 
 def recipes_of(problem) -> list[tuple]:
     """(label, :class:`~optdesign.solver.compiled.Recipe`) of every NLP a solve of
-    ``problem`` builds first (:func:`nlps_of`)."""
-    return _recipes(problem, nlps_of(problem))
+    ``problem`` builds first (:func:`nlps_of`), with the problem's own Hessian."""
+    return _recipes(problem, [(nlp, problem.solver.hessian) for nlp in nlps_of(problem)])
 
 
 def _recipes(problem, nlps: list) -> list[tuple]:
-    """(label, recipe) of each of ``nlps``, ``problem``'s (:func:`nlps_of`)."""
+    """(label, recipe) of each (NLP, Hessian) of ``nlps``, ``problem``'s (:func:`nlps_of`)."""
     from optdesign.solver import compiled
 
     return [(f"{problem.model.count_variable} = {nlp.count}"
-             + (" (nominal)" if nlp.problem is not problem else ""),
-             compiled.recipe(nlp.x_sym, nlp.p_sym, nlp.f, nlp.g, nlp.problem.solver.hessian))
-            for nlp in nlps]
+             + (" (nominal)" if nlp.problem is not problem else "")
+             + (" (exact Hessian)" if hessian != problem.solver.hessian else ""),
+             compiled.recipe(nlp.x_sym, nlp.p_sym, nlp.f, nlp.g, hessian))
+            for nlp, hessian in nlps]
 
 
 def nlps_of(problem) -> list:

@@ -185,7 +185,8 @@ class ParetoResult(Tabular):
                         "per_count": {str(k): v for k, v in self.per_count.items()},
                         "knee": None if self.knee is None else _plain(self.knee.to_dict()),
                         "points": [_plain(r) for r in df.to_dict(orient="records")],
-                        "ends": self.ends},
+                        "ends": [{k: v for k, v in end.items() if k not in JOURNAL_ONLY}
+                                 for end in self.ends]},
                        count_units | dict(self.criteria_columns) | {k: "mm" for k in lengths}
                        | self._axis_units())
 
@@ -198,6 +199,11 @@ class ParetoResult(Tabular):
                 "gain": f"{axis.unit} ({'+' if axis.sign > 0 else '-'}{axis.name}: the "
                         f"front's second objective, larger is better)",
                 "gain_multiplier": f"1/{axis.unit} (d delta / d gain)"}
+
+
+#: the keys of a journal record that stay in ``points.jsonl``: ``warm``, the primal-dual
+#: optimum a neighbour's polish starts from (:meth:`optdesign.solver.PhaseSolver.solve_from`)
+JOURNAL_ONLY = ("warm",)
 
 
 def _plain(row: dict) -> dict:

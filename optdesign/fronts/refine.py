@@ -100,6 +100,8 @@ class Task:
     start: dict
     also: list = field(default_factory=list)
     replaces: int | None = None
+    #: the primal-dual optimum that ended on ``start`` (its record's ``warm``), if any
+    warm: dict | None = None
 
 
 def _index(r: dict):
@@ -359,7 +361,8 @@ def plan(records: list[dict], lengths: list[str], settings: Refinement,
                        key=lambda pq: _index(pq[0])):
         if _index(p) in attempted or p.get("epsilon") is None:
             continue
-        tasks.append(Task(index, float(p["epsilon"]), q["design"], replaces=_index(p)))
+        tasks.append(Task(index, float(p["epsilon"]), q["design"], replaces=_index(p),
+                          warm=q.get("warm")))
         index += 1
     if not settings.enabled:
         return tasks
@@ -375,7 +378,7 @@ def plan(records: list[dict], lengths: list[str], settings: Refinement,
         # turns, another branch may take over: the upper neighbour's is polished too
         turns = g.turn_deg is None or g.turn_deg > settings.max_turn_deg
         tasks.append(Task(index, float(eps), g.lower["design"],
-                          also=[g.upper["design"]] if turns else []))
+                          also=[g.upper["design"]] if turns else [], warm=g.lower.get("warm")))
         index += 1
     return tasks
 
@@ -454,7 +457,7 @@ def plan_hypervolume(records: list[dict], lengths: list[str], settings: Refineme
                 continue
             start = b if n == b["count"] else a
             also = [a["design"]] if n == b["count"] == a["count"] and turns else []
-            jobs.append((n, lo, hi, start["design"], also))
+            jobs.append((n, lo, hi, start, also))
         if jobs:
             candidates.append((dx * dy, jobs, settings.resolvable(a, b)))
     given = share_out([max(1, min(math.ceil(math.sqrt(area / settings.hypervolume_gap)) - 1,
@@ -473,8 +476,9 @@ def plan_hypervolume(records: list[dict], lengths: list[str], settings: Refineme
             for j in range(1, k + 1):
                 i = index.setdefault(n, least_index)
                 index[n] = i + 1
-                out.append(CountTask(n, Task(i, float(lo + (hi - lo) * j / (k + 1)), start,
-                                             also=also)))
+                out.append(CountTask(n, Task(i, float(lo + (hi - lo) * j / (k + 1)),
+                                             start["design"], also=also,
+                                             warm=start.get("warm"))))
     return again + out
 
 
@@ -493,6 +497,6 @@ def _beaten_again(records: list[dict], lengths: list[str], least_index: int
             if _index(p) in attempted or p.get("epsilon") is None:
                 continue
             out.append(CountTask(n, Task(index, float(p["epsilon"]), q["design"],
-                                         replaces=_index(p))))
+                                         replaces=_index(p), warm=q.get("warm"))))
             index += 1
     return out

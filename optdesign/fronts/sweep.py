@@ -295,7 +295,7 @@ class _Sweep:
         while c["pos"] < len(c["order"]) and (count, c["order"][c["pos"]]) in self.done:
             prev = self.done[(count, c["order"][c["pos"]])]
             if prev["feasible"]:
-                c["start"] = prev["design"]
+                c["start"], c["warm"] = prev["design"], prev.get("warm")
             c["pos"] += 1
         if c["pos"] >= len(c["order"]):
             return
@@ -304,7 +304,7 @@ class _Sweep:
         eps = float(c["eps"][i])
         fut = self.ex.submit(_worker().solve_point, self.problem, count, i, eps, c["start"],
                              fallbacks, self.seeds(count, eps, [c["start"]]), [],
-                             {"round": 0}, self.known(count))
+                             {"round": 0}, self.known(count), c.get("warm"))
         self.running[fut] = (count, j)
 
     def known(self, count: int) -> list[dict]:
@@ -378,7 +378,7 @@ class _Sweep:
                  + f"; {len(self.done)} of {self.bar.total} done")
         for count, t, seeds, tags in jobs:
             fut = self.ex.submit(_worker().solve_point, self.problem, count, t.index, t.epsilon,
-                                 t.start, [], seeds, t.also, tags, self.known(count))
+                                 t.start, [], seeds, t.also, tags, self.known(count), t.warm)
             self.running[fut] = (count, "round")
 
     def advance_hypervolume(self) -> bool:
@@ -430,7 +430,7 @@ class _Sweep:
             up = order[0] <= order[-1]
             start = lo_end if up or not hi_end["feasible"] else hi_end
             self.chains[(count, j)] = {"order": order, "pos": 0, "start": start["design"],
-                                       "eps": eps, "ends": ok_ends}
+                                       "warm": start.get("warm"), "eps": eps, "ends": ok_ends}
             self.submit_chain(count, j)
 
 

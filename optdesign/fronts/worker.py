@@ -122,7 +122,8 @@ def solve_end(problem, count: int, kind: str) -> dict:
         point.tries, point.epsilon = point.tries + 1, epsilon
         return point.record("optimal", outcome.values, ver,
                             _multiplier(axis, rec) if rec.ipopt_status == "Solve_Succeeded"
-                            else None, rec.ipopt_status, active=rec.active, limited_by=limits)
+                            else None, rec.ipopt_status, active=rec.active,
+                            limited_by=limits) | {"warm": outcome.warm}
     return point.record("optimal", res.design, _Ver.of(res), None, "Solve_Succeeded",
                         active=res.active, limited_by=limits)
 
@@ -142,7 +143,8 @@ def _multiplier(axis, record) -> float | None:
 
 def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
                 fallbacks: list[dict], seeds: list[dict] = (), also: list[dict] = (),
-                tags: dict | None = None, known: list[dict] = ()) -> dict:
+                tags: dict | None = None, known: list[dict] = (),
+                warm: dict | None = None) -> dict:
     """Least ripple subject to ratio >= ε: polished from ``start`` (the chain's previous
     design) and each of ``also`` (further warm starts: a refined point's other neighbour),
     then from each of ``seeds`` (the screening's best basins that reach ε, as secondary
@@ -152,18 +154,20 @@ def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
     worse than a known design that meets its ε; the best verified design wins
     (:func:`best_candidate`). Only when none is feasible: from each of ``fallbacks``,
     then from the multi-start designs. ``tags`` are added to the record (its round, the point
-    a re-solve replaces)."""
+    a re-solve replaces). ``warm``: the primal-dual optimum that ended on ``start`` (its
+    record's ``warm``): ``start``'s polish begins from it where the NLP is the same
+    (:meth:`PhaseSolver.solve_from`); the record keeps its own optimum's as ``warm``."""
     point = _Point(problem, count, index, "sweep", epsilon)
     solver = PhaseSolver(problem, count)
     found: list[Candidate] = []
     last, note = None, "no start design assembles"
 
-    def attempt(values, source, secondary=False):
+    def attempt(values, source, secondary=False, warm=None):
         nonlocal last, note
         point.tries += 1
         solver.avoid = [c.outcome.values for c in found if c.feasible] if secondary else []
         try:
-            outcome = solver.solve_from(dict(values), secondary=secondary,
+            outcome = solver.solve_from(dict(values), secondary=secondary, warm=warm,
                                         **_bound(axis_of(problem), epsilon))
         except (OptDesignError, RuntimeError, ValueError, ArithmeticError) as exc:
             # one start that breaks the evaluator (CasADi raises RuntimeError) is one failed
@@ -181,7 +185,8 @@ def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
         "chain" if not tags.get("round") else "neighbour"
     for values in [start, *also]:
         if values:                  # a second warm start stops once it joins the first's
-            attempt(values, first if values is start else "neighbour", secondary=bool(found))
+            attempt(values, first if values is start else "neighbour", secondary=bool(found),
+                    warm=warm if values is start else None)
     for values in seeds:
         if not any(_beside(problem, values, c.outcome.values) for c in found if c.feasible):
             attempt(values, "screening", secondary=bool(found))
@@ -219,7 +224,7 @@ def solve_point(problem, count: int, index: int, epsilon: float, start: dict,
             else None
         out = point.record("optimal", best.outcome.values, best.outcome.verification, mult,
                            rec.ipopt_status, active=rec.active)
-        return out | {"start_from": best.source} | tags
+        return out | {"start_from": best.source, "warm": best.outcome.warm} | tags
     # as in solve.driver: infeasible only on IPOPT's word, not for running out of iterations
     status = "infeasible" if last is not None and \
         last.ipopt_status == "Infeasible_Problem_Detected" else "failed"

@@ -287,7 +287,9 @@ SOLVER_KEYS: tuple[Key, ...] = (
         "where a range spans two decades or more)", default=SolverSettings.max_iter,
         lower=1, upper=COUNTS["max_iter"]),
     Key("hessian", "choice", "IPOPT's Hessian: a limited-memory quasi-Newton one, or CasADi's "
-        "exact second derivatives", default=SolverSettings.hessian, choices=HESSIANS),
+        "exact second derivatives (a front's point polished from its neighbour's optimum "
+        "runs on the exact one whatever this says)", default=SolverSettings.hessian,
+        choices=HESSIANS),
     Key("peak_samples", "bool", "also bound ω_max at every sample (a safety net)",
         default=SolverSettings.peak_samples),
 )

@@ -66,6 +66,24 @@ IPOPT_OPTIONS = {
     "print_time": False,
 }
 
+#: IPOPT's options for a run warm-started from a neighbour's optimum (its primal-dual
+#: solution: a front's point polished from the point beside it): the barrier starts at the
+#: final μ of a cold run and stays monotone, and the start is left where it lies, so the
+#: exact Hessian's Newton steps converge in a few iterations where a cold start is pushed
+#: off its active bounds and walks back (IPOPT's ``warm_start_*`` options;
+#: ``docs/pareto.md``, "Warm starts")
+WARM_OPTIONS = {
+    "ipopt.warm_start_init_point": "yes",
+    "ipopt.mu_strategy": "monotone",
+    "ipopt.mu_init": 1e-11,
+    "ipopt.tol": 1e-10,     # a tenth of a cold run's: a warm optimum is a cold one's to 1e-11
+    "ipopt.warm_start_bound_push": 1e-9,
+    "ipopt.warm_start_bound_frac": 1e-9,
+    "ipopt.warm_start_slack_bound_push": 1e-9,
+    "ipopt.warm_start_slack_bound_frac": 1e-9,
+    "ipopt.warm_start_mult_bound_push": 1e-9,
+}
+
 
 @dataclass
 class Block:
@@ -412,7 +430,7 @@ class PhaseNLP:
         #: (quantity, block tag) of every block that tracks a quantity's figures
         self._tracked: set = set()
         self.layout = Layout()
-        self._solvers: dict[str, ca.Function] = {}
+        self._solvers: dict = {}        # hessian, or (hessian, "warm") -> IPOPT
         self.watch: _Watch | None = None
         #: the C heap's bytes this NLP holds: its graph and each IPOPT built on it (what
         #: their builds left allocated, :mod:`optdesign.numerics.heap`; 0 where unknown)
@@ -756,34 +774,38 @@ class PhaseNLP:
         block.peaks, block.troughs = f_m, f_before
         return block
 
-    def solver(self, hessian: str) -> ca.Function:
+    def solver(self, hessian: str, warm: bool = False) -> ca.Function:
         """IPOPT on this NLP with the exact Hessian or L-BFGS; each built at its first use, on
         the NLP's compiled derivatives where they are cached (:mod:`optdesign.solver.compiled`).
+        ``warm``: the IPOPT of a run from a neighbour's primal-dual optimum
+        (:data:`WARM_OPTIONS`), on the same library.
 
         Every iteration passes through :attr:`watch`, which stops a run that has entered the
         neighbourhood of an optimum found already (its basin is known)."""
-        if hessian not in self._solvers:
+        key = (hessian, "warm") if warm else hessian
+        if key not in self._solvers:
             if self.watch is None:
                 self.watch = _Watch(self.n_x, self.n_g, self.layout.find(self.layout.x,
                                                                           "lengths"))
             opts = dict(IPOPT_OPTIONS) | {"ipopt.max_iter": iterations_of(self.problem),
                                           "ipopt.hessian_approximation": hessian,
-                                          "iteration_callback": self.watch}
+                                          "iteration_callback": self.watch} | \
+                (WARM_OPTIONS if warm else {})
             before = heap.in_use()
             name = f"nlp_n{self.count}"
             path = None
             if self._record is not None:
                 path = self._libraries.get(hessian) or _library_named(self._record, hessian)
             if path is not None:            # made from its record: the library it names
-                self._solvers[hessian] = compiled.nlpsol_of(name, path, opts)
+                self._solvers[key] = compiled.nlpsol_of(name, path, opts)
             else:
                 found: dict = {}
-                self._solvers[hessian] = compiled.nlpsol(name, self.x_sym, self.p_sym, self.f,
-                                                         self.g, opts, found)
+                self._solvers[key] = compiled.nlpsol(name, self.x_sym, self.p_sym, self.f,
+                                                     self.g, opts, found)
                 if "digest" in found:
                     self._kept_as_record(hessian, found["digest"])
             self.held_bytes += heap.grown_since(before)
-        return self._solvers[hessian]
+        return self._solvers[key]
 
     # ------------------------------------------------------------------ per solve
     def _held(self, held: Held | None) -> Held:

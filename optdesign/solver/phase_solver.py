@@ -13,6 +13,7 @@ are polished is :mod:`optdesign.solver.polishing`'s; the solve of every count is
 """
 from __future__ import annotations
 
+import hashlib
 import time
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass, replace
@@ -50,6 +51,10 @@ SAME_SLOT = 0.05
 #: re-solves with new scenario parts (a robust solve), besides MAX_REFINEMENTS
 MAX_ROBUST_STEPS = 6
 ANGLE_SAFETY_DEG = 0.01
+#: a warm-started run not converged in this many iterations (it jumped across a change of the
+#: active set, where the exact Hessian's iterations cost more than a cold run's) is stopped
+#: and run again cold
+WARM_BUDGET = 12
 
 @dataclass
 class Timings:
@@ -100,6 +105,10 @@ class Outcome:
     #: the polish ended where the output comes to rest once a turn (the NLP's edge, which
     #: the exact envelope crosses: :meth:`PhaseNLP.output_at_rest`)
     at_rest: bool = False
+    #: the primal-dual solution of the IPOPT run that gave ``values`` and its NLP's
+    #: signature (plain lists: a journal keeps it), for a neighbour's warm start; None where
+    #: the design is not a run's optimum (a start kept as it is, a run not accepted)
+    warm: dict | None = None
 
 
 class PhaseSolver:
@@ -176,14 +185,17 @@ class PhaseSolver:
 
     def solve_from(self, values: dict, min_ratio=None, max_ripple=None,
                    ver: Verification | None = None, secondary: bool = False,
-                   bound=None) -> Outcome:
+                   bound=None, warm: dict | None = None) -> Outcome:
         """IPOPT from one start; refined until the exact check agrees with the NLP's structure.
 
         ``min_ratio``, ``max_ripple`` and ``bound`` (a QuantityBound, tightening the problem's
         own bound of that quantity) move bounds for this solve only, as a Pareto point's ε.
         A quasi-Newton run that stalls (or runs out of iterations) is retried once with the
         exact Hessian, unless the start is ``secondary`` (a further basin polished beside the
-        best one: a stalled run there is abandoned, not rescued)."""
+        best one: a stalled run there is abandoned, not rescued). ``warm``: the
+        :attr:`Outcome.warm` of the polish that ended on ``values`` (a neighbour's optimum
+        under its own bound): the first run starts from its primal-dual solution where the
+        NLP is the same (:meth:`_ipopt`); a warm run that does not succeed is run again cold."""
         problem = self.at(min_ratio, max_ripple, bound)
         # a start is checked at the listed eccentricities only; the first polish's result is
         # searched over the whole regulation interval
@@ -199,7 +211,7 @@ class PhaseSolver:
         # The NLP holds the worst transmission angle at exact points: no margin to start with;
         # a dip the exact check still finds tightens the bound by the deficit.
         iterations, status, surrogate, multiplier, note = 0, "not run", None, None, ""
-        at_rest = False
+        at_rest, primal_dual = False, None
         active: list = []
         tightening, hessian = 0.0, problem.solver.hessian
         refinements = regulation_steps = robust_steps = 0
@@ -209,12 +221,18 @@ class PhaseSolver:
                 note = ver.message
                 break
             run = self._ipopt(problem, ver, tightening, hessian,
-                              SECONDARY_BUDGET - iterations if secondary else None)
+                              SECONDARY_BUDGET - iterations if secondary else None, warm)
+            warm = None                 # the first run's alone
+            if run.warm and run.status not in SUCCESS:
+                iterations += run.iterations      # counted, and the run made again cold
+                refinements -= 1
+                continue
             status, surrogate, multiplier, active = (run.status, run.surrogate,
                                                      run.multiplier, run.active)
             at_rest = run.at_rest
             iterations += run.iterations
             trial = values | run.lengths
+            primal_dual = None
             # Where the run ends decides what follows; the exact check of where it stopped is
             # made only where something reads it (a stopped or retried run keeps its start's)
             if hessian == "limited-memory" and not secondary and (
@@ -241,6 +259,7 @@ class PhaseSolver:
                 values, ver = (trial, new) if new.sequences else (values, ver)
                 break
             given, (values, ver) = ver.sequences, (trial, new)
+            primal_dual = run.primal_dual
             if status == ACCEPTABLE and hessian == "limited-memory" and not secondary:
                 # stopped at IPOPT's looser tolerance (a flat valley, an optimum at the box's
                 # far edge): on from here with the exact Hessian, to the full tolerance
@@ -296,7 +315,8 @@ class PhaseSolver:
                              delta=ver.delta, note=note, ratio_multiplier=multiplier,
                              active=_in_objective_units(problem, active, ver)
                              if status in SUCCESS else [])
-        return Outcome(record, ver, values, surrogate, at_rest)
+        return Outcome(record, ver, values, surrogate, at_rest,
+                       primal_dual if record.feasible else None)
 
     def at(self, min_ratio=None, max_ripple=None, bound=None):
         """The problem with a Pareto point's bounds (see :meth:`solve_from`)."""
@@ -345,13 +365,24 @@ class PhaseSolver:
         return nlp, dict(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=params)
 
     def _ipopt(self, problem, ver: Verification, tightening: float, hessian: str,
-               budget: int | None = None) -> "_Run":
+               budget: int | None = None, warm: dict | None = None) -> "_Run":
         """One IPOPT run on the NLP from the verified design ``ver`` (stopped after ``budget``
-        iterations when one is given)."""
+        iterations when one is given). ``warm``: a neighbour's optimum (:attr:`Outcome.warm`);
+        where it was found on this very NLP (the same slots, hand-over sequences and held
+        slots: :func:`warm_signature`), the run starts from its primal-dual solution with the
+        exact Hessian and :data:`~optdesign.solver.nlp.WARM_OPTIONS`."""
         nlp, args = self.ipopt_arguments(problem, ver, tightening)
         lbx, ubx, lbg, ubg, params = (args[k] for k in ("lbx", "ubx", "lbg", "ubg", "p"))
+        signature = warm_signature(nlp, ver)
+        warm = warm if warm is not None and warm.get("signature") == signature else None
+        if warm is not None:
+            hessian = "exact"
+            budget = WARM_BUDGET if budget is None else min(budget, WARM_BUDGET)
+            args = args | {"x0": np.clip(np.asarray(warm["x"], float), lbx, ubx),
+                           "lam_x0": np.asarray(warm["lam_x"], float),
+                           "lam_g0": np.asarray(warm["lam_g"], float)}
         with self.timings.stage("build"):
-            solver = nlp.solver(hessian)
+            solver = nlp.solver(hessian, warm=warm is not None)
         nlp.watch.start([np.array([v[k] for k in nlp.free]) / nlp.scale for v in self.avoid],
                         lbg, ubg, None if budget is None else max(budget, 1))
         with self.timings.stage("ipopt"), interrupts_kept():   # CasADi swallows Ctrl-C
@@ -361,7 +392,10 @@ class PhaseSolver:
         joined = nlp.watch.joined
         status = JOINED if joined else STALLED if nlp.watch.stalled else \
             EXHAUSTED if nlp.watch.exhausted else stats["return_status"]
-        return _Run(status=status,
+        return _Run(status=status, warm=warm is not None,
+                    primal_dual={"signature": signature, "x": x.tolist(),
+                                 "lam_x": np.array(sol["lam_x"]).ravel().tolist(),
+                                 "lam_g": np.array(sol["lam_g"]).ravel().tolist()},
                     iterations=int(stats["iter_count"]),
                     lengths=nlp.lengths_of(x), surrogate=nlp.worst_ripple(x, params, ver.held),
                     multiplier=nlp.multiplier(sol["lam_g"], "min_ratio"),
@@ -388,6 +422,19 @@ class _Run:
     binding_parts: tuple = ()   # a robust solve's held parts that bind (their offsets)
     picks_moved: bool = False   # an attained form's worst candidate moved (NLP.picks_moved)
     at_rest: bool = False       # the output comes to rest once a turn (NLP.output_at_rest)
+    #: where the run ended, for a neighbour's warm start (:attr:`Outcome.warm`)
+    primal_dual: dict | None = None
+    warm: bool = False          # the run started from a neighbour's primal-dual optimum
+
+
+def warm_signature(nlp: PhaseNLP, ver: Verification) -> str:
+    """What a primal-dual solution's meaning rests on: the NLP (count, slots, sizes), the
+    hand-over sequences and the held slots its run was given. A warm start is taken only
+    on an equal signature, so ``x`` and the multipliers index the same variables and rows."""
+    held = ver.held if ver.held is not None else Held()
+    text = repr((nlp.count, nlp.slots, nlp.n_x, nlp.n_g, ver.sequences, held.eccentricities,
+                 held.active, held.offsets, held.scenario_active))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 def _in_objective_units(problem, active: list[dict], ver: Verification) -> list[dict]:

@@ -167,7 +167,7 @@ def test_a_quasi_newton_verdict_of_infeasibility_is_retried_in_a_box_of_decades(
     start = problem.start_values() | {problem.model.count_variable: count}
     hessians = []
 
-    def infeasible(self, problem, ver, tightening, hessian, budget=None):
+    def infeasible(self, problem, ver, tightening, hessian, budget=None, warm=None):
         hessians.append(hessian)
         return _Run(status="Infeasible_Problem_Detected", iterations=7, lengths={},
                     surrogate=0.5, multiplier=0.0, at_window=False, binding="", active=[])

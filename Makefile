@@ -70,6 +70,7 @@ docs-quick: $(STAMP)
 	$(PY) benchmarks/robust_cost.py
 	$(PY) benchmarks/atlas_scaling.py
 	$(PY) benchmarks/sweeps_compiled.py
+	$(PY) benchmarks/warm_starts.py
 	$(PY) benchmarks/command_latency.py --rounds 5
 	$(PY) benchmarks/figure_cost.py
 	$(PY) benchmarks/docs.py --splice

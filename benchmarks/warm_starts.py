@@ -29,6 +29,10 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from optdesign.outputs.atomic import atomic_write_json, atomic_write_text  # noqa: E402
+
 RESULTS = ROOT / "benchmarks" / "results"
 FRONTS = ["pareto_fourbar", "pareto_disc_three_counts", "pareto_slotted_forward",
           "pareto_reverse_flat"]
@@ -139,9 +143,8 @@ def main() -> int:
     RESULTS.mkdir(exist_ok=True)
     meta = {"time": time.strftime("%Y-%m-%d %H:%M:%S"), "python": platform.python_version(),
             "machine": platform.machine() + " " + platform.system(), "rounds": args.rounds}
-    (RESULTS / "warm_starts.md").write_text("\n".join(lines) + "\n")
-    (RESULTS / "warm_starts.json").write_text(json.dumps({"meta": meta, "rows": rows},
-                                                         indent=2) + "\n")
+    atomic_write_text(RESULTS / "warm_starts.md", "\n".join(lines) + "\n")
+    atomic_write_json(RESULTS / "warm_starts.json", {"meta": meta, "rows": rows})
     print("\n".join(lines))
     return 0
 

@@ -431,9 +431,7 @@ def warm_signature(nlp: PhaseNLP, ver: Verification) -> str:
     """What a primal-dual solution's meaning rests on: the NLP (count, slots, sizes), the
     hand-over sequences and the held slots its run was given. A warm start is taken only
     on an equal signature, so ``x`` and the multipliers index the same variables and rows."""
-    held = ver.held if ver.held is not None else Held()
-    text = repr((nlp.count, nlp.slots, nlp.n_x, nlp.n_g, ver.sequences, held.eccentricities,
-                 held.active, held.offsets, held.scenario_active))
+    text = repr((nlp.count, nlp.slots, nlp.n_x, nlp.n_g, ver.sequences, ver.held))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 

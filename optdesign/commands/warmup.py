@@ -6,7 +6,8 @@ of the mechanism's kinematics runs them as NumPy statements and starts theirs
 (:mod:`optdesign.numerics.native_lanes`); this command builds every admissible phase count's
 NLP and both lanes (the kinematics, and the speeds the screening reads) now, as many at once
 as there are cores, and prints where each library is (for a file with a ``pareto:`` section,
-each count's NLP with the exact Hessian too: a front's warm-started points run on it). Exit 0 when every library is in place;
+each count's NLP with the exact Hessian too, on which a front's warm-started points run, and
+the NLP of each count's largest-ratio end). Exit 0 when every library is in place;
 1 when one could not be built (no C compiler on PATH, no cache folder of the user's own, a
 compiler that failed: solves then run on the virtual machine and the NumPy lanes, as
 before); 2 for bad input (one line naming the file and key).
@@ -39,7 +40,8 @@ def run(args) -> int:
         print(f"optdesign warm-up: no C compiler ({compiled.COMPILER}) on PATH: solves run "
               f"on CasADi's virtual machine", file=sys.stderr)
         return 1
-    nlps = [(nlp, hessian) for nlp in nlps_of(problem) for hessian in hessians_of(problem)]
+    nlps = [(nlp, hessian) for nlp in nlps_of(problem) for hessian in hessians_of(problem)] \
+        + [(nlp, "exact") for nlp in end_nlps_of(problem)]
     labels, recipes = zip(*(_recipes(problem, nlps) + lanes_recipes_of(problem)))
     ok, built = True, []
     for label, (_, path, seconds, note) in zip(labels, compiled.warm_up(
@@ -79,7 +81,9 @@ def _recipes(problem, nlps: list) -> list[tuple]:
     from optdesign.solver import compiled
 
     return [(f"{problem.model.count_variable} = {nlp.count}"
-             + (" (nominal)" if nlp.problem is not problem else "")
+             + (" (largest-ratio end)" if nlp.problem.objective.minimize !=
+                problem.objective.minimize else
+                " (nominal)" if nlp.problem is not problem else "")
              + (" (exact Hessian)" if hessian != problem.solver.hessian else ""),
              compiled.recipe(nlp.x_sym, nlp.p_sym, nlp.f, nlp.g, hessian))
             for nlp, hessian in nlps]
@@ -105,6 +109,25 @@ def nlps_of(problem) -> list:
         for which in problems:
             out.append(PhaseSolver(which, count).nlp(
                 verify(which, given, search=False).sequences))
+    return out
+
+
+def end_nlps_of(problem) -> list:
+    """For a file with a ``pareto:`` section: the NLP of each swept count's largest-ratio end
+    (its gain maximised, on the exact Hessian: :func:`optdesign.fronts.worker.largest_gain_problem`),
+    with the hand-over slots of the file's own design; none for a file without one."""
+    if problem.method.pareto is None:
+        return []
+    from optdesign.fronts.axis import with_axis
+    from optdesign.fronts.worker import largest_gain_problem
+    from optdesign.solver import verify
+    from optdesign.solver.phase_solver import PhaseSolver
+
+    ends = largest_gain_problem(with_axis(problem))
+    out = []
+    for count in list(problem.method.pareto.counts or problem.counts()):
+        given = ends.start_values() | {ends.model.count_variable: count}
+        out.append(PhaseSolver(ends, count).nlp(verify(ends, given, search=False).sequences))
     return out
 
 

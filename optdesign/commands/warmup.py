@@ -114,8 +114,9 @@ def nlps_of(problem) -> list:
 
 def end_nlps_of(problem) -> list:
     """For a file with a ``pareto:`` section: the NLP of each swept count's largest-ratio end
-    (its gain maximised, on the exact Hessian: :func:`optdesign.fronts.worker.largest_gain_problem`),
-    with the hand-over slots of the file's own design; none for a file without one."""
+    (its gain maximised, on the exact Hessian:
+    :func:`optdesign.fronts.worker.largest_gain_problem`), with the hand-over slots of the
+    file's own design; none for a file without one."""
     if problem.method.pareto is None:
         return []
     from optdesign.fronts.axis import with_axis

@@ -40,8 +40,7 @@ def run(args) -> int:
         print(f"optdesign warm-up: no C compiler ({compiled.COMPILER}) on PATH: solves run "
               f"on CasADi's virtual machine", file=sys.stderr)
         return 1
-    nlps = [(nlp, hessian) for nlp in nlps_of(problem) for hessian in hessians_of(problem)] \
-        + [(nlp, "exact") for nlp in end_nlps_of(problem)]
+    nlps = nlps_to_compile(problem)
     labels, recipes = zip(*(_recipes(problem, nlps) + lanes_recipes_of(problem)))
     ok, built = True, []
     for label, (_, path, seconds, note) in zip(labels, compiled.warm_up(
@@ -56,10 +55,19 @@ def run(args) -> int:
     # each compiled NLP's record beside its library (optdesign.solver.nlp_memo), kept as its
     # IPOPT is made on the library (an NLP left on the virtual machine is not made here: its
     # derivatives' functions would take seconds to build)
-    for (nlp, hessian), on_library in zip(nlps, built):
+    for (nlp, hessian, *_), on_library in zip(nlps, built):
         if on_library:
             nlp.solver(hessian)
     return 0 if ok else 1
+
+
+def nlps_to_compile(problem) -> list[tuple]:
+    """(NLP, Hessian, what it is) of every NLP warm-up compiles: each of :func:`nlps_of` with
+    each of :func:`hessians_of`, and each of :func:`end_nlps_of` on the exact Hessian."""
+    nominal = " (nominal)"
+    return [(nlp, hessian, nominal if nlp.problem is not problem else "")
+            for nlp in nlps_of(problem) for hessian in hessians_of(problem)] + \
+        [(nlp, "exact", " (largest-ratio end)") for nlp in end_nlps_of(problem)]
 
 
 def hessians_of(problem) -> list[str]:
@@ -77,16 +85,18 @@ def recipes_of(problem) -> list[tuple]:
 
 
 def _recipes(problem, nlps: list) -> list[tuple]:
-    """(label, recipe) of each (NLP, Hessian) of ``nlps``, ``problem``'s (:func:`nlps_of`)."""
+    """(label, recipe) of each (NLP, Hessian) or (NLP, Hessian, what it is) of ``nlps``,
+    ``problem``'s (:func:`nlps_of`; without a third, a robust solve's nominal NLP is so
+    named)."""
     from optdesign.solver import compiled
 
-    return [(f"{problem.model.count_variable} = {nlp.count}"
-             + (" (largest-ratio end)" if nlp.problem.objective.minimize !=
-                problem.objective.minimize else
-                " (nominal)" if nlp.problem is not problem else "")
-             + (" (exact Hessian)" if hessian != problem.solver.hessian else ""),
-             compiled.recipe(nlp.x_sym, nlp.p_sym, nlp.f, nlp.g, hessian))
-            for nlp, hessian in nlps]
+    out = []
+    for nlp, hessian, *what in nlps:
+        what = what[0] if what else " (nominal)" if nlp.problem is not problem else ""
+        out.append((f"{problem.model.count_variable} = {nlp.count}{what}"
+                    + (" (exact Hessian)" if hessian != problem.solver.hessian else ""),
+                    compiled.recipe(nlp.x_sym, nlp.p_sym, nlp.f, nlp.g, hessian)))
+    return out
 
 
 def nlps_of(problem) -> list:
